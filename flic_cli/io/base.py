@@ -1,0 +1,67 @@
+"""The one small interface every dataset format implements."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Protocol
+
+import numpy as np
+
+from flic_cli.range_image import RangeImage
+
+
+@dataclass(frozen=True)
+class FrameRef:
+    """A cheap, picklable reference to one frame of a dataset (sent to worker processes).
+
+    Attributes
+    ----------
+    sequence : sequence name (SemanticKITTI ``"00"``; Moosmann: the log folder's name)
+    frame : frame number (``000123.bin`` -> 123, ``scan00123.png`` -> 123)
+    path : the scan file (``.bin`` or ``.png``)
+    label_path : the ``.label`` file, or None when the format or the frame has none
+    format : ``"semantickitti"`` or ``"moosmann"``
+    """
+
+    sequence: str
+    frame: int
+    path: Path
+    label_path: Path | None
+    format: str
+
+
+@dataclass
+class Frame:
+    """One loaded frame.
+
+    Attributes
+    ----------
+    ref : where it came from
+    points : (N, 3) float32, metres, sensor frame (x forward, y left, z up), in scan order
+    labels : (N,) uint32 SemanticKITTI encoding (semantic = low 16 bits, instance = high 16 bits)
+        or None when the dataset has no labels
+    image : the sensor's own range image when the format is one (Moosmann), else None (the points
+        are projected by :func:`flic_cli.range_image.project_points`). When set, ``points[i]`` is the
+        point of pixel ``image.point_pixel[i]``.
+    """
+
+    ref: FrameRef
+    points: np.ndarray
+    labels: np.ndarray | None
+    image: RangeImage | None = None
+
+
+class Dataset(Protocol):
+    """A dataset format: lists its frames, loads one frame."""
+
+    root: Path
+    format: str
+
+    def refs(self) -> list[FrameRef]:
+        """Every selected frame, ordered by sequence then frame number."""
+        ...
+
+    def load(self, ref: FrameRef) -> Frame:
+        """Read one frame; raises :class:`flic_cli.errors.FlicInputError` on bad input."""
+        ...
