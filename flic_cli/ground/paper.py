@@ -1,0 +1,105 @@
+"""The FLIC paper's ground extraction (paper section III-A)."""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from flic_cli.range_image import RangeImage
+
+
+@njit(cache=True)
+def _paper_ground(
+    ranges: np.ndarray,
+    sin_a: np.ndarray,
+    cos_a: np.ndarray,
+    tan_lo: np.ndarray,
+    tan_hi: np.ndarray,
+    sin_el: np.ndarray,
+    cos_el: np.ndarray,
+    sensor_height: float,
+    tan_slope: float,
+) -> np.ndarray:
+    h, w = ranges.shape
+    ground = np.zeros((h, w), dtype=np.bool_)
+    for r in range(h):
+        # The pair (upper, lower) whose surface angle decides this cell: the cell above, or for
+        # the top row (and where the cell above is empty) the cell below, as in the paper's figure.
+        for c in range(w):
+            d = ranges[r, c]
+            if d <= 0.0:
+                continue
+            # Height image test first (cheap): above the 10 deg line from the wheel -> never ground.
+            z = d * sin_el[r]
+            rho = d * cos_el[r]
+            if z > -sensor_height + tan_slope * rho:
+                continue
+            p = r  # lower row index of the pair
+            if r == 0 or ranges[r - 1, c] <= 0.0:
+                p = r + 1
+                if p >= h or ranges[p, c] <= 0.0:
+                    continue
+            d1 = ranges[p - 1, c]  # upper cell
+            d2 = ranges[p, c]  # lower cell
+            num = d2 * sin_a[p]
+            den = d1 - d2 * cos_a[p]
+            # tan(beta) = num / den must lie in [tan_lo, tan_hi]; den <= 0 means beta >= 90 deg.
+            if den > 0.0 and tan_lo[p] * den <= num and num <= tan_hi[p] * den:
+                ground[r, c] = True
+    return ground
+
+
+def paper_tables(
+    elevation: np.ndarray, max_slope_deg: float = 10.0
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Per-row constants of the tan(beta) test: sin/cos of the beam gap, tan of the accepted band.
+
+    For the pair (row p-1 above, row p), a horizontal surface gives beta equal to the depression
+    angle of the upper beam; the cell is flat when beta is within +-max_slope of it.
+    """
+    el = np.asarray(elevation, dtype=np.float64)
+    gap = np.zeros_like(el)
+    gap[1:] = np.abs(el[:-1] - el[1:])
+    depression = np.zeros_like(el)
+    depression[1:] = -el[:-1]
+    theta = np.radians(max_slope_deg)
+    lo = np.clip(depression - theta, 0.0, np.radians(89.0))
+    hi = np.clip(depression + theta, 0.0, np.radians(89.0))
+    return np.sin(gap), np.cos(gap), np.tan(lo), np.tan(hi)
+
+
+def paper_ground(
+    image: RangeImage, max_slope_deg: float = 10.0, sensor_height_m: float = 1.73
+) -> np.ndarray:
+    """Ground pixels by the paper's surface-angle test, keeping elevated horizontal surfaces.
+
+    For every cell, the surface angle beta with the cell above is tested through
+    ``tan(beta) = d2 sin(alpha) / (d1 - d2 cos(alpha))`` (no arctan; sin and cos precomputed per
+    row). A cell is ground when beta is within ``max_slope_deg`` of the angle a horizontal surface
+    would give, unless the height image puts it above the line that rises from the wheel contact
+    point (``sensor_height_m`` below the sensor) at ``max_slope_deg``: car roofs and hoods are
+    horizontal but stay.
+
+    Parameters
+    ----------
+    image : the range image.
+    max_slope_deg : accepted deviation from horizontal and slope of the height line, degrees.
+    sensor_height_m : height of the sensor above the road, metres.
+
+    Returns
+    -------
+    (H, W) bool, True = ground. Empty pixels are never ground.
+    """
+    sin_a, cos_a, tan_lo, tan_hi = paper_tables(image.elevation, max_slope_deg)
+    el = image.elevation
+    return _paper_ground(
+        image.ranges,
+        sin_a,
+        cos_a,
+        tan_lo,
+        tan_hi,
+        np.sin(el),
+        np.cos(el),
+        float(sensor_height_m),
+        float(np.tan(np.radians(max_slope_deg))),
+    )

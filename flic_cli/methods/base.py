@@ -1,0 +1,50 @@
+"""The one interface every clusterer implements: range scan in, per-point labels out."""
+
+from __future__ import annotations
+
+from typing import ClassVar, Protocol
+
+import numpy as np
+
+from flic_cli.range_image import RangeImage
+
+
+class Method(Protocol):
+    """A clusterer.
+
+    ``segment(image, points, ground)`` returns one int32 label per point of the scan: 0 =
+    unclustered or ground, 1..K = clusters. ``ground`` is the (H, W) ground mask of the chosen
+    remover or None (nothing removed). ``points`` are the scan's (N, 3) points, pixel
+    ``image.point_pixel[i]`` for point i. ``main_param`` names the parameter that
+    ``flic sweep-threshold`` varies.
+    """
+
+    main_param: ClassVar[str]
+
+    def segment(
+        self, image: RangeImage, points: np.ndarray, ground: np.ndarray | None
+    ) -> np.ndarray: ...
+
+
+def drop_small(labels: np.ndarray, min_size: int) -> np.ndarray:
+    """Relabel clusters 1..K in order of first appearance, dropping those under ``min_size``.
+
+    Parameters
+    ----------
+    labels : (N,) int array, values < 1 mean "no cluster".
+    min_size : smallest cluster kept, in points.
+    """
+    labels = np.asarray(labels)
+    out = np.zeros(labels.shape, dtype=np.int32)
+    has = labels > 0
+    if not has.any():
+        return out
+    ids, first, inverse, counts = np.unique(
+        labels[has], return_index=True, return_inverse=True, return_counts=True
+    )
+    keep = counts >= min_size
+    order = np.argsort(first[keep], kind="stable")
+    new_id = np.zeros(ids.size, dtype=np.int32)
+    new_id[np.flatnonzero(keep)[order]] = np.arange(1, order.size + 1, dtype=np.int32)
+    out[has] = new_id[inverse]
+    return out

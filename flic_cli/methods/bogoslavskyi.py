@@ -1,0 +1,78 @@
+"""Bogoslavskyi & Stachniss' range-image segmentation (IROS 2016)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import ClassVar
+
+import numpy as np
+
+from flic_cli.methods._unionfind import ANGLE, connect_labels
+from flic_cli.methods.flic import connection_sets
+from flic_cli.range_image import RangeImage
+
+
+def bogoslavskyi_beta(d1: np.ndarray, d2: np.ndarray, alpha: np.ndarray) -> np.ndarray:
+    """Their angle ``beta = atan2(d_min sin(alpha), d_max - d_min cos(alpha))``, radians."""
+    big = np.maximum(d1, d2)
+    small = np.minimum(d1, d2)
+    return np.arctan2(small * np.sin(alpha), big - small * np.cos(alpha))
+
+
+def bogoslavskyi_labels(
+    ranges: np.ndarray,
+    elevation: np.ndarray,
+    angle_deg: float = 10.0,
+    min_size: int = 100,
+    mask: np.ndarray | None = None,
+) -> np.ndarray:
+    """Cluster labels by the angle criterion: 4-neighbours (wrapping) join when beta > angle_deg.
+
+    The test is done without arctan: ``beta > theta`` iff ``d_min sin(alpha) > tan(theta) *
+    (d_max - d_min cos(alpha))`` or the right-hand bracket is not positive (beta >= 90 deg).
+
+    Parameters
+    ----------
+    ranges : (H, W) float32, metres, 0 = none.
+    elevation : (H,) radians.
+    angle_deg : the threshold theta, degrees (10 in the original).
+    min_size : smallest cluster, pixels.
+    mask : pixels to cluster (default: valid ones).
+
+    Returns
+    -------
+    (H, W) int32 labels, 0 = none.
+    """
+    ranges = np.ascontiguousarray(ranges, dtype=np.float32)
+    if mask is None:
+        mask = ranges > 0
+    steps, offsets, lattice = connection_sets(())
+    return connect_labels(
+        ranges,
+        np.ascontiguousarray(mask),
+        np.asarray(elevation, dtype=np.float64),
+        steps,
+        offsets,
+        lattice,
+        ANGLE,
+        float(np.tan(np.radians(angle_deg))),
+        int(min_size),
+    )
+
+
+@dataclass(frozen=True)
+class Bogoslavskyi:
+    """Bogoslavskyi & Stachniss as a :class:`flic_cli.methods.base.Method`."""
+
+    angle_deg: float = 10.0
+    min_size: int = 100
+    main_param: ClassVar[str] = "angle_deg"
+
+    def segment(
+        self, image: RangeImage, points: np.ndarray, ground: np.ndarray | None
+    ) -> np.ndarray:
+        mask = image.ranges > 0 if ground is None else (image.ranges > 0) & ~ground
+        labels = bogoslavskyi_labels(
+            image.ranges, image.elevation, self.angle_deg, self.min_size, mask
+        )
+        return image.point_labels(labels)

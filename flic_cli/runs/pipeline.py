@@ -1,0 +1,176 @@
+"""The chain every run uses: frame -> range image -> ground extraction -> clusterer -> labels.
+
+``prepare`` turns a loaded frame into the evaluated point set and its range image (the "No Ground"
+setting drops the ground classes' points by label first); a :class:`Segmenter` runs one method,
+with the chosen ground remover, on a prepared frame. Runs (segment, evaluate, benchmark, sweep)
+differ only in what they do with the labels.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+from typing import Any
+
+import numpy as np
+
+from flic_cli.config import build_method, method_ground
+from flic_cli.errors import FlicInputError
+from flic_cli.io.base import Frame, FrameRef
+from flic_cli.range_image import RangeImage, project_points
+
+SETTINGS = ("ground", "no-ground")
+GROUND_CLASSES = np.array([40, 44, 48, 49, 60, 72], dtype=np.uint32)
+
+
+@dataclass
+class Prepared:
+    """A frame ready for the methods.
+
+    Attributes
+    ----------
+    ref : the frame's reference
+    image : range image of the evaluated point set
+    points : (N, 3) float32, the evaluated point set
+    labels : (N,) uint32 ground-truth labels of the evaluated points, or None
+    keep : (N_scan,) bool, which points of the scan are evaluated (None = all)
+    n_scan : number of points of the scan as read
+    """
+
+    ref: FrameRef
+    image: RangeImage
+    points: np.ndarray
+    labels: np.ndarray | None
+    keep: np.ndarray | None
+    n_scan: int
+
+    def scan_labels(self, labels: np.ndarray) -> np.ndarray:
+        """Labels of the evaluated points expanded to every point of the scan (0 = dropped)."""
+        if self.keep is None:
+            return labels
+        out = np.zeros(self.n_scan, dtype=labels.dtype)
+        out[self.keep] = labels
+        return out
+
+
+def prepare(frame: Frame, setting: str, projection: dict[str, Any]) -> Prepared:
+    """Project a frame for the given setting.
+
+    Parameters
+    ----------
+    frame : a loaded frame.
+    setting : ``"ground"`` (all points; methods extract the ground themselves) or ``"no-ground"``
+        (the ground classes' points are removed by label, the paper's "No Ground" column).
+    projection : the ``[projection]`` table of the config (width, mode, rows, fov).
+    """
+    if setting not in SETTINGS:
+        raise FlicInputError(None, f"--setting must be one of {', '.join(SETTINGS)}")
+    points, labels, keep = frame.points, frame.labels, None
+    if setting == "no-ground":
+        if labels is None:
+            raise FlicInputError(
+                frame.ref.path,
+                "the no-ground setting removes the ground classes by label, and this frame has "
+                "no labels (use --setting ground)",
+            )
+        keep = ~np.isin(labels & 0xFFFF, GROUND_CLASSES)
+        points, labels = points[keep], labels[keep]
+    if frame.image is not None and keep is None:
+        image = frame.image
+    elif frame.image is not None:  # a sensor image with some points removed
+        pix = frame.image.point_pixel[keep]
+        ranges = np.zeros(frame.image.ranges.size, dtype=np.float32)
+        ranges[pix] = frame.image.ranges.reshape(-1)[pix]
+        image = RangeImage(
+            ranges.reshape(frame.image.ranges.shape), frame.image.elevation, pix, "native"
+        )
+    else:
+        image = project_points(
+            points,
+            width=int(projection.get("width", 2048)),
+            mode=str(projection.get("mode", "rings")),
+            rows=int(projection.get("rows", 64)),
+            fov_up_deg=float(projection.get("fov_up_deg", 3.0)),
+            fov_down_deg=float(projection.get("fov_down_deg", -25.0)),
+        )
+    return Prepared(frame.ref, image, points, labels, keep, frame.points.shape[0])
+
+
+@dataclass(frozen=True)
+class Segmenter:
+    """One method with its ground remover: ``segmenter(image, points) -> (labels, ground)``.
+
+    Attributes
+    ----------
+    name : the method variant's name in the config (e.g. ``"flic14"``)
+    method : the clusterer (see :mod:`flic_cli.methods`)
+    ground : ``"paper"``, ``"bogoslavskyi"`` or None (no ground extraction: "No Ground" setting)
+    ground_params : keyword arguments of the ground remover
+    """
+
+    name: str
+    method: Any
+    ground: str | None
+    ground_params: dict
+
+    def extract_ground(self, image: RangeImage) -> np.ndarray | None:
+        if self.ground is None:
+            return None
+        from flic_cli.ground import REMOVERS
+
+        return REMOVERS[self.ground](image, **self.ground_params)
+
+    def __call__(self, image: RangeImage, points: np.ndarray) -> tuple[np.ndarray, Any]:
+        """Per-point labels (0 = none) and the ground mask used (or None)."""
+        ground = self.extract_ground(image)
+        return self.method.segment(image, points, ground), ground
+
+    def with_param(self, value: float) -> Segmenter:
+        """The same segmenter with the method's main parameter (sweeps) set to ``value``."""
+        method = replace(self.method, **{self.method.main_param: value})
+        return replace(self, method=method)
+
+
+def make_segmenter(
+    cfg: dict[str, Any], name: str, setting: str, ground_remover: str = "paper"
+) -> Segmenter:
+    """Build the segmenter of method variant ``name``.
+
+    Parameters
+    ----------
+    cfg : the loaded config.
+    name : a ``[methods.NAME]`` variant.
+    setting : ``"ground"`` or ``"no-ground"`` (no remover runs in the latter).
+    ground_remover : ``"paper"`` (every method uses the paper's ground extraction: the paper's
+        protocol), ``"own"`` (each method its own ``ground`` key: Bogoslavskyi uses theirs) or a
+        remover's name.
+    """
+    method = build_method(cfg, name)
+    if setting == "no-ground":
+        return Segmenter(name, method, None, {})
+    remover = method_ground(cfg, name) if ground_remover == "own" else ground_remover
+    params = dict(cfg.get("ground", {}).get(remover, {}))
+    if remover not in cfg.get("ground", {}):
+        raise FlicInputError(None, f"unknown ground remover {remover!r} (paper | bogoslavskyi | own)")
+    return Segmenter(name, method, remover, params)
+
+
+def resolve_method(method: str, mc: int | None) -> str:
+    """``--method flic --mc 14`` -> ``"flic14"``; other names pass through."""
+    if mc is not None:
+        if method != "flic":
+            raise FlicInputError(None, "--mc applies to --method flic only")
+        return f"flic{mc}"
+    return "flic0" if method == "flic" else method
+
+
+def parse_methods(text: str, cfg: dict[str, Any]) -> list[str]:
+    """Comma-separated method variant names, checked against the config."""
+    names = [t.strip() for t in text.split(",") if t.strip()]
+    unknown = [n for n in names if n not in cfg.get("methods", {})]
+    if unknown or not names:
+        raise FlicInputError(
+            None,
+            f"unknown method {', '.join(unknown) or '(none)'} "
+            f"(known: {', '.join(cfg.get('methods', {}))})",
+        )
+    return names

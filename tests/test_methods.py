@@ -1,0 +1,192 @@
+"""The clusterers against brute-force graphs built from 3D coordinates."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import assume, given, settings
+from hypothesis import strategies as st
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import connected_components
+
+from flic_cli.methods import bogoslavskyi_labels, dbscan_labels, drop_small, flic_labels
+from flic_cli.methods.bogoslavskyi import bogoslavskyi_beta
+from flic_cli.range_image import RangeImage
+
+
+def xyz_of(ranges: np.ndarray, elevation: np.ndarray) -> np.ndarray:
+    """(H, W, 3) Cartesian points, computed directly from the angles (no law of cosines)."""
+    h, w = ranges.shape
+    img = RangeImage(ranges.astype(np.float32), elevation, np.zeros(0, np.int64), "native")
+    return img.to_points().astype(np.float64).reshape(h, w, 3)
+
+
+def neighbour_pairs(h: int, w: int, maps, mc_mode: str):
+    """Every pair of pixels the definition connects (direct 4-neighbours + Map Connections)."""
+    sets = [((1, 1), (0, 0), True)]
+    sets += [((m[0], m[1]), tuple(m[2:]) or (0, 0), mc_mode == "map") for m in maps]
+    for (kr, kc), (orow, ocol), lattice in sets:
+        rows = range(orow % kr, h, kr) if lattice else range(h)
+        cols = list(range(ocol % kc, w, kc)) if lattice else list(range(w))
+        for r in rows:
+            for i, c in enumerate(cols):
+                if r + kr < h:
+                    yield (r, c), (r + kr, c)
+                if lattice:
+                    yield (r, c), (r, cols[(i + 1) % len(cols)])
+                else:
+                    yield (r, c), (r, (c + kc) % w)
+
+
+def canonical(labels: np.ndarray) -> np.ndarray:
+    """Renumber labels 1..K in raster order of first appearance (0 stays 0)."""
+    flat = labels.reshape(-1)
+    out = np.zeros_like(flat)
+    mapping: dict[int, int] = {}
+    for i, v in enumerate(flat):
+        if v > 0:
+            out[i] = mapping.setdefault(int(v), len(mapping) + 1)
+    return out.reshape(labels.shape)
+
+
+def brute_force(ranges, valid, pairs, linked, min_size):
+    h, w = ranges.shape
+    a, b = [], []
+    for (r1, c1), (r2, c2) in pairs:
+        if (r1, c1) != (r2, c2) and valid[r1, c1] and valid[r2, c2] and linked(r1, c1, r2, c2):
+            a.append(r1 * w + c1)
+            b.append(r2 * w + c2)
+    n = h * w
+    graph = coo_matrix((np.ones(len(a)), (a, b)), shape=(n, n))
+    _, comp = connected_components(graph, directed=False)
+    comp = comp + 1
+    comp[~valid.reshape(-1)] = 0
+    return canonical(drop_small(comp, min_size).reshape(h, w))
+
+
+@st.composite
+def range_images(draw):
+    h = draw(st.integers(1, 7))
+    w = draw(st.integers(2, 14))
+    seed = draw(st.integers(0, 2**32 - 1))
+    rng = np.random.default_rng(seed)
+    ranges = rng.uniform(2.0, 12.0, (h, w))
+    # smooth surfaces plus jumps, so that both connected and separated pairs occur
+    ranges = np.where(rng.random((h, w)) < 0.5, np.round(ranges / 3) * 3, ranges)
+    ranges[rng.random((h, w)) < draw(st.floats(0.0, 0.4))] = 0.0
+    elevation = np.sort(rng.uniform(-0.45, 0.05, h))[::-1].copy()
+    return ranges.astype(np.float32), elevation
+
+
+maps_strategy = st.lists(
+    st.tuples(st.integers(1, 4), st.integers(1, 5), st.integers(0, 3), st.integers(0, 4)),
+    max_size=3,
+)
+
+
+@settings(max_examples=300, deadline=None)
+@given(
+    image=range_images(),
+    threshold=st.floats(0.3, 3.0),
+    maps=maps_strategy,
+    mc_mode=st.sampled_from(["map", "neighbour"]),
+    min_size=st.integers(1, 4),
+)
+def test_flic_equals_components_of_3d_distance_graph(image, threshold, maps, mc_mode, min_size):
+    ranges, elevation = image
+    h, w = ranges.shape
+    maps = [m[:2] if m[2] == m[3] == 0 else m for m in maps]
+    pts = xyz_of(ranges, elevation)
+    valid = ranges > 0
+    dist = {}
+
+    def linked(r1, c1, r2, c2):
+        d = float(np.linalg.norm(pts[r1, c1] - pts[r2, c2]))
+        dist[(r1, c1, r2, c2)] = d
+        return d < threshold
+
+    expected = brute_force(ranges, valid, neighbour_pairs(h, w, maps, mc_mode), linked, min_size)
+    # float32 ranges vs float64 coordinates: stay away from exact ties with the threshold
+    assume(all(abs(d - threshold) > 1e-4 for d in dist.values()))
+    got = flic_labels(ranges, elevation, threshold, min_size, tuple(maps), mc_mode)
+    np.testing.assert_array_equal(canonical(got), expected)
+    np.testing.assert_array_equal(got, canonical(got))  # numbered 1..K in raster order
+
+
+@settings(max_examples=200, deadline=None)
+@given(image=range_images(), angle=st.floats(2.0, 60.0), min_size=st.integers(1, 3))
+def test_bogoslavskyi_equals_components_of_atan2_graph(image, angle, min_size):
+    ranges, elevation = image
+    h, w = ranges.shape
+    theta = np.radians(angle)
+    pts = xyz_of(ranges, elevation)
+    betas = []
+
+    def linked(r1, c1, r2, c2):
+        u, v = pts[r1, c1], pts[r2, c2]
+        alpha = np.arccos(np.clip(u @ v / np.linalg.norm(u) / np.linalg.norm(v), -1, 1))
+        beta = float(bogoslavskyi_beta(ranges[r1, c1], ranges[r2, c2], alpha))
+        betas.append(beta)
+        return beta > theta
+
+    expected = brute_force(ranges, ranges > 0, neighbour_pairs(h, w, [], "map"), linked, min_size)
+    assume(all(abs(b - theta) > 1e-5 for b in betas))
+    got = bogoslavskyi_labels(ranges, elevation, angle, min_size)
+    np.testing.assert_array_equal(canonical(got), expected)
+
+
+def test_bogoslavskyi_beta_is_the_angle_at_the_far_point():
+    # d_max = 2, d_min = 1, alpha = 60 deg: the triangle is right-angled at the near point, so the
+    # angle at the far point is 30 deg.
+    assert np.degrees(bogoslavskyi_beta(2.0, 1.0, np.radians(60.0))) == pytest.approx(30.0)
+    assert np.degrees(bogoslavskyi_beta(1.0, 2.0, np.radians(60.0))) == pytest.approx(30.0)
+
+
+def test_flic_wraps_around_horizontally():
+    ranges = np.zeros((1, 8), np.float32)
+    ranges[0, [0, 7]] = 10.0  # 2 columns apart across the seam: 10 m * 45 deg = far apart
+    ranges[0, [0, 1, 6, 7]] = 1.0  # 1 m, 45 deg apart: chord 0.77 m < 0.8 m
+    labels = flic_labels(ranges, np.zeros(1), 0.8, 1)
+    assert labels[0, 0] == labels[0, 7] == labels[0, 1] == labels[0, 6] != 0
+    assert labels.max() == 1
+
+
+def test_map_connection_bridges_a_gap():
+    # A flat wall at 5 m with one missing column: direct FLIC splits it, one MC (2, 2) joins it.
+    w = 2048
+    ranges = np.zeros((4, w), np.float32)
+    ranges[:, 100:140] = 5.0
+    ranges[:, 121] = 0.0
+    elevation = np.radians([0.0, -0.4, -0.8, -1.2])
+    direct = flic_labels(ranges, elevation, 0.8, 1)
+    assert direct.max() == 2
+    # the map of every 2nd column holds columns 120 and 122, which are 0.6 deg apart
+    one_mc = flic_labels(ranges, elevation, 0.8, 1, maps=((2, 2),))
+    assert one_mc.max() == 1
+    # with the gap on column 120 the map itself has a hole; the neighbour reading still bridges it
+    ranges[:, 121] = 5.0
+    ranges[:, 120] = 0.0
+    assert flic_labels(ranges, elevation, 0.8, 1, maps=((2, 2),)).max() == 2
+    assert flic_labels(ranges, elevation, 0.8, 1, maps=((2, 2),), mc_mode="neighbour").max() == 1
+
+
+def test_min_size_drops_small_clusters():
+    ranges = np.zeros((2, 2048), np.float32)
+    ranges[:, 0:3] = 4.0  # 6 pixels
+    ranges[0, 6:8] = 4.0  # 2 pixels
+    labels = flic_labels(ranges, np.radians([0.0, -0.4]), 0.8, min_size=3)
+    assert labels.max() == 1 and (labels > 0).sum() == 6
+
+
+def test_dbscan_labels_two_blobs_and_min_size():
+    rng = np.random.default_rng(0)
+    a = rng.normal([0, 0, 0], 0.05, (150, 3))
+    b = rng.normal([5, 0, 0], 0.05, (120, 3))
+    c = rng.normal([0, 9, 0], 0.05, (20, 3))  # too small
+    labels = dbscan_labels(np.vstack([a, b, c]), eps_m=0.3, min_samples=5, min_size=100)
+    assert set(labels[:150]) == {1} and set(labels[150:270]) == {2} and set(labels[270:]) == {0}
+
+
+def test_drop_small_relabels_in_order_of_appearance():
+    out = drop_small(np.array([5, 5, 0, 3, 3, 3, 9, -1]), 2)
+    np.testing.assert_array_equal(out, [1, 1, 0, 2, 2, 2, 0, 0])
