@@ -41,9 +41,9 @@ class Frame:
     points : (N, 3) float32, metres, sensor frame (x forward, y left, z up), in scan order
     labels : (N,) uint32 SemanticKITTI encoding (semantic = low 16 bits, instance = high 16 bits)
         or None when the dataset has no labels
-    image : the sensor's own range image when the format is one (Moosmann), else None (the points
-        are projected by :func:`flic_cli.range_image.project_points`). When set, ``points[i]`` is the
-        point of pixel ``image.point_pixel[i]``.
+    image : the sensor's own range image when the format is one (Moosmann), else None (the
+        points are projected by :func:`flic_cli.range_image.project_points`). When set,
+        ``points[i]`` is the point of pixel ``image.point_pixel[i]``.
     """
 
     ref: FrameRef

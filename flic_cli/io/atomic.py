@@ -1,0 +1,72 @@
+"""File access with one-line errors: atomic writes and checked reads.
+
+Every writer of the project goes through :func:`atomic_write`, so that an interrupted or failing
+write never leaves a half-written file behind: the data goes to a temporary file in the target's
+folder and is renamed over the target only once it is complete.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Iterator
+from contextlib import contextmanager
+from pathlib import Path
+
+from flic_cli.errors import FlicInputError
+
+
+@contextmanager
+def atomic_write(path: str | Path) -> Iterator[Path]:
+    """Write a file atomically.
+
+    Yields a temporary path ``.<name>.tmp-<pid>`` in the target's folder; the caller writes the
+    complete file there. On success it is renamed over ``path`` (:func:`os.replace`); on an
+    exception it is removed and the exception propagates.
+
+    Parameters
+    ----------
+    path : the file to write; missing parent folders are created.
+
+    Raises
+    ------
+    FlicInputError
+        When the folder cannot be created or written to.
+    """
+    path = Path(path)
+    folder = path.parent
+    tmp = folder / f".{path.name}.tmp-{os.getpid()}"
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+        tmp.touch()
+    except OSError:
+        raise FlicInputError(folder, "output folder is not writable") from None
+    try:
+        yield tmp
+        os.replace(tmp, path)
+    except BaseException:
+        tmp.unlink(missing_ok=True)
+        raise
+
+
+def atomic_write_bytes(path: str | Path, data: bytes) -> None:
+    """Write ``data`` to ``path`` atomically (see :func:`atomic_write`)."""
+    with atomic_write(path) as tmp:
+        tmp.write_bytes(data)
+
+
+def read_bytes(path: str | Path) -> bytes:
+    """The content of a file; :class:`FlicInputError` when it is missing or unreadable."""
+    try:
+        return Path(path).read_bytes()
+    except FileNotFoundError:
+        raise FlicInputError(path, "does not exist") from None
+    except OSError as exc:
+        raise FlicInputError(path, f"cannot be read ({exc.strerror})") from None
+
+
+def read_text(path: str | Path) -> str:
+    """The content of a UTF-8 text file; :class:`FlicInputError` when missing or unreadable."""
+    try:
+        return read_bytes(path).decode("utf-8")
+    except UnicodeDecodeError:
+        raise FlicInputError(path, "is not a UTF-8 text file") from None

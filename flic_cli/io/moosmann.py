@@ -1,0 +1,295 @@
+"""Moosmann-style logs: 16-bit greyscale PNG range images plus ``img.cfg`` (SPEC §1).
+
+A log is a folder with ``scanNNNNN.png`` files (directly or in a ``range/`` subfolder) and an
+``img.cfg`` (in the log folder, or beside the PNGs). Pixel value / 500 = range in metres,
+0 = no measurement. Frames may be missing (gaps in the numbering) or empty.
+"""
+
+from __future__ import annotations
+
+import io
+import re
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+from PIL import Image, UnidentifiedImageError
+
+from flic_cli.errors import FlicInputError
+from flic_cli.io.atomic import atomic_write, atomic_write_bytes, read_bytes, read_text
+from flic_cli.io.base import Frame, FrameRef
+from flic_cli.io.semantickitti import frames_text, in_frames
+from flic_cli.range_image import from_sensor_image
+
+FORMAT = "moosmann"
+RANGE_SCALE = 500.0
+"""PNG pixel value per metre (1 unit = 2 mm)."""
+
+_SCAN_NAME = re.compile(r"scan(\d+)\.png")
+_PNG_COLOUR_TYPES = {
+    0: "greyscale",
+    2: "RGB",
+    3: "palette",
+    4: "greyscale with alpha",
+    6: "RGBA",
+}  # IHDR colour type -> name
+
+
+@dataclass(frozen=True, eq=False)
+class ImgCfg:
+    """The content of an ``img.cfg``.
+
+    Attributes
+    ----------
+    width, height : image size in pixels (870 x 64 for the HDL-64E logs).
+    h_start_deg, h_stop_deg : yaw of the first and last column in degrees (180, -180).
+    pitch_deg : (height,) float64 pitch of every row in degrees, positive = downward.
+    """
+
+    width: int
+    height: int
+    h_start_deg: float
+    h_stop_deg: float
+    pitch_deg: np.ndarray
+
+    def elevation(self) -> np.ndarray:
+        """(height,) elevation of every row in radians, positive up (= -pitch)."""
+        return np.radians(-np.asarray(self.pitch_deg, dtype=np.float64))
+
+
+def read_img_cfg(path: str | Path) -> ImgCfg:
+    """Read an ``img.cfg``.
+
+    Lines starting with ``#`` are comments; the data (which may span lines) is ``;``-separated:
+    ``width; height; h_start; h_stop; pitch_1; ...; pitch_height`` (angles in degrees); a
+    trailing ``;`` is allowed.
+
+    Raises
+    ------
+    FlicInputError
+        When the file is missing, a field is not a number, the size is not positive integers or
+        the number of pitch angles differs from the height.
+    """
+    data = ";".join(
+        line for line in read_text(path).splitlines() if not line.lstrip().startswith("#")
+    )
+    fields = [f.strip() for f in data.split(";") if f.strip()]
+    if len(fields) < 4:
+        raise FlicInputError(
+            path, f"has {len(fields)} fields, expected width; height; h_start; h_stop; angles..."
+        )
+    values = []
+    for i, field in enumerate(fields, start=1):
+        try:
+            values.append(float(field))
+        except ValueError:
+            raise FlicInputError(path, f"field {i} {field!r} is not a number") from None
+    for name, v in (("width", values[0]), ("height", values[1])):
+        if v != int(v) or v < 1:
+            raise FlicInputError(path, f"image {name} {v:g} is not a positive integer")
+    width, height = int(values[0]), int(values[1])
+    pitch = np.array(values[4:], dtype=np.float64)
+    if pitch.size != height:
+        raise FlicInputError(path, f"declares {height} rows but lists {pitch.size} vertical angles")
+    return ImgCfg(width, height, values[2], values[3], pitch)
+
+
+def write_img_cfg(path: str | Path, cfg: ImgCfg) -> None:
+    """Write an ``img.cfg`` atomically (one comment line, one data line)."""
+    fields = [str(cfg.width), str(cfg.height), repr(cfg.h_start_deg), repr(cfg.h_stop_deg)]
+    fields += [repr(float(a)) for a in cfg.pitch_deg]
+    text = (
+        "# imgHSize; imgVSize; horizStartAngle; horizStopAngle; vertAngle_1; ...; vertAngle_n\n"
+        + "; ".join(fields)
+        + ";\n"
+    )
+    atomic_write_bytes(path, text.encode())
+
+
+def read_png_range(path: str | Path, cfg: ImgCfg) -> np.ndarray:
+    """Read a 16-bit greyscale PNG range image.
+
+    Parameters
+    ----------
+    path : the ``scanNNNNN.png`` file.
+    cfg : the log's ``img.cfg``; the image must have its size.
+
+    Returns
+    -------
+    (height, width) float32 ranges in metres (pixel value / 500), 0 = no measurement.
+
+    Raises
+    ------
+    FlicInputError
+        When the file is missing, not a decodable PNG, not 16-bit greyscale or not of the size
+        that ``img.cfg`` declares.
+    """
+    data = read_bytes(path)
+    try:
+        with Image.open(io.BytesIO(data)) as img:
+            img.load()
+            fmt, size = img.format, img.size
+            pixels = np.asarray(img)
+    except UnidentifiedImageError:
+        raise FlicInputError(path, "is not an image Pillow can decode, expected a PNG") from None
+    except (OSError, SyntaxError, ValueError) as exc:
+        raise FlicInputError(path, f"cannot be decoded ({exc})") from None
+    if fmt != "PNG":
+        raise FlicInputError(path, f"is a {fmt} image, expected a 16-bit greyscale PNG")
+    # The IHDR chunk comes first: bytes 24 and 25 are the bit depth and the colour type.
+    depth, colour = data[24], data[25]
+    if (depth, colour) != (16, 0):
+        raise FlicInputError(
+            path,
+            f"is {depth}-bit {_PNG_COLOUR_TYPES.get(colour, f'colour type {colour}')}, "
+            "expected 16-bit greyscale",
+        )
+    if size != (cfg.width, cfg.height):
+        raise FlicInputError(
+            path, f"is {size[0]}x{size[1]} but img.cfg says {cfg.width}x{cfg.height}"
+        )
+    return pixels.astype(np.float32) / np.float32(RANGE_SCALE)
+
+
+def write_png_range(path: str | Path, ranges_m: np.ndarray) -> None:
+    """Write ranges as a 16-bit greyscale PNG atomically.
+
+    Parameters
+    ----------
+    path : the file to write.
+    ranges_m : (H, W) ranges in metres; stored as ``round(range * 500)`` clipped to 65535
+        (131.07 m); 0, negative and non-finite values are stored as 0 (no measurement).
+    """
+    r = np.asarray(ranges_m, dtype=np.float64)
+    r = np.where(np.isfinite(r) & (r > 0), r, 0.0)
+    pixels = np.clip(np.rint(r * RANGE_SCALE), 0, 65535).astype("<u2")
+    with atomic_write(path) as tmp:
+        Image.fromarray(pixels).save(tmp, format="PNG")
+
+
+# ---------------------------------------------------------------------------------------------
+# Dataset
+# ---------------------------------------------------------------------------------------------
+
+
+def _scan_frames(folder: Path) -> dict[int, Path]:
+    """``scanNNNNN.png`` files of a folder by frame number."""
+    out = {}
+    for p in folder.glob("scan*.png"):
+        m = _SCAN_NAME.fullmatch(p.name)
+        if m:
+            out[int(m.group(1))] = p
+    return dict(sorted(out.items()))
+
+
+def _log_layout(folder: Path) -> tuple[Path, Path] | None:
+    """``(scans folder, img.cfg)`` of a log folder, or None when ``folder`` is no log.
+
+    A log holds ``scan*.png`` directly or in ``range/``, and an ``img.cfg`` beside the PNGs or in
+    the folder above them. A folder with ``img.cfg`` but no scans is a log without frames.
+    """
+    for scans in (folder, folder / "range"):
+        if _scan_frames(scans):
+            for cfg in (scans / "img.cfg", scans.parent / "img.cfg"):
+                if cfg.is_file():
+                    return scans, cfg
+            raise FlicInputError(
+                folder,
+                f"holds scan*.png range images but no img.cfg "
+                f"(looked in {scans} and {scans.parent})",
+            )
+    if (folder / "img.cfg").is_file():
+        return folder, folder / "img.cfg"
+    return None
+
+
+def is_moosmann(path: Path) -> bool:
+    """True when ``path`` is a Moosmann log or a folder of logs."""
+    if not path.is_dir():
+        return False
+    return _log_layout(path) is not None or any(
+        d.is_dir() and _log_layout(d) is not None for d in path.iterdir()
+    )
+
+
+def _log_name(scans: Path) -> str:
+    return scans.parent.name if scans.name == "range" else scans.name
+
+
+class MoosmannDataset:
+    """A Moosmann log or a folder of logs (implements :class:`Dataset`).
+
+    Parameters
+    ----------
+    root : a log folder, a log's ``range/`` folder, or a folder whose subfolders are logs (the
+        sequence name of a log is its folder's name).
+    sequences : the logs to use; None = all.
+    frames : ``(start, stop)`` frame numbers, start inclusive, stop exclusive, either None for
+        open; None = all frames.
+
+    Raises
+    ------
+    FlicInputError
+        When ``root`` holds no log, a requested log does not exist, an ``img.cfg`` is missing or
+        malformed, or no frame is selected.
+    """
+
+    format = FORMAT
+
+    def __init__(
+        self,
+        root: str | Path,
+        sequences: list[str] | None = None,
+        frames: tuple[int | None, int | None] | None = None,
+    ) -> None:
+        self.root = Path(root)
+        if not self.root.is_dir():
+            raise FlicInputError(self.root, "is not a folder")
+        layout = _log_layout(self.root)
+        if layout is not None:
+            logs = {_log_name(layout[0]): layout}
+        else:
+            candidates = sorted(d for d in self.root.iterdir() if d.is_dir())
+            logs = {d.name: lay for d in candidates if (lay := _log_layout(d)) is not None}
+        if not logs:
+            raise FlicInputError(self.root, "holds no Moosmann log (img.cfg + scan*.png)")
+        if sequences is not None:
+            unknown = [s for s in sequences if s not in logs]
+            if unknown:
+                raise FlicInputError(
+                    self.root, f"no sequence {', '.join(unknown)} (found: {', '.join(logs)})"
+                )
+            logs = {s: logs[s] for s in sorted(set(sequences))}
+        self._cfg: dict[str, ImgCfg] = {}
+        self._refs: list[FrameRef] = []
+        for name, (scans, cfg_path) in logs.items():
+            cfg = read_img_cfg(cfg_path)
+            if (cfg.h_start_deg, cfg.h_stop_deg) != (180.0, -180.0):
+                raise FlicInputError(
+                    cfg_path,
+                    f"horizontal angles {cfg.h_start_deg:g}; {cfg.h_stop_deg:g} are not "
+                    "supported (only a full turn: 180; -180)",
+                )
+            self._cfg[name] = cfg
+            self._refs += [
+                FrameRef(name, frame, path, None, FORMAT)
+                for frame, path in _scan_frames(scans).items()
+                if in_frames(frame, frames)
+            ]
+        if not self._refs:
+            what = "" if frames is None else f" in frames {frames_text(frames)}"
+            raise FlicInputError(self.root, f"no scan*.png frames{what} in logs {', '.join(logs)}")
+
+    def refs(self) -> list[FrameRef]:
+        """Every selected frame, ordered by log then frame number."""
+        return list(self._refs)
+
+    def load(self, ref: FrameRef) -> Frame:
+        """Read one frame; an all-zero image gives a frame with 0 points.
+
+        ``points[i]`` is the point of pixel ``image.point_pixel[i]`` (row-major pixel order).
+        """
+        cfg = self._cfg[ref.sequence]
+        image = from_sensor_image(read_png_range(ref.path, cfg), cfg.elevation())
+        points = image.to_points()[image.point_pixel]
+        return Frame(ref, points, None, image)

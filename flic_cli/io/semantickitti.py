@@ -1,0 +1,424 @@
+"""SemanticKITTI: scans (``.bin``), labels (``.label``), calibration, poses, predictions.
+
+Layout (SPEC §1): ``<root>/sequences/<NN>/velodyne/<XXXXXX>.bin`` and
+``<root>/sequences/<NN>/labels/<XXXXXX>.label``; ``<root>`` may also be one sequence folder.
+Predictions use the ``.label`` encoding with the cluster id in the upper 16 bits, in
+``<out>/sequences/<NN>/predictions/<XXXXXX>.label``.
+"""
+
+from __future__ import annotations
+
+import warnings
+from pathlib import Path
+from typing import NamedTuple
+
+import numpy as np
+
+from flic_cli.errors import FlicInputError
+from flic_cli.io.atomic import atomic_write_bytes, read_bytes, read_text
+from flic_cli.io.base import Frame, FrameRef
+
+FORMAT = "semantickitti"
+
+
+class Scan(NamedTuple):
+    """One validated scan.
+
+    Attributes
+    ----------
+    points : (N, 3) float32, metres, sensor frame, scan order; only points with finite coordinates
+    remission : (N,) float32, 0..1
+    labels : (N,) uint32 SemanticKITTI encoding, or None when no label file was given
+    """
+
+    points: np.ndarray
+    remission: np.ndarray
+    labels: np.ndarray | None
+
+
+# ---------------------------------------------------------------------------------------------
+# Scans and labels
+# ---------------------------------------------------------------------------------------------
+
+
+def read_bin(path: str | Path) -> np.ndarray:
+    """Read a ``.bin`` scan as stored, without dropping anything.
+
+    Parameters
+    ----------
+    path : the ``.bin`` file (little-endian float32 x, y, z in metres and remission per point).
+
+    Returns
+    -------
+    (N, 4) float32 array, N >= 1.
+
+    Raises
+    ------
+    FlicInputError
+        When the file is missing, its size is not a multiple of 16 bytes or it holds no points.
+    """
+    data = read_bytes(path)
+    if len(data) % 16:
+        raise FlicInputError(
+            path, f"size {len(data)} bytes is not a multiple of 16 (x, y, z, remission float32)"
+        )
+    if not data:
+        raise FlicInputError(path, "is empty (0 points)")
+    return np.frombuffer(data, dtype="<f4").reshape(-1, 4).astype(np.float32)
+
+
+def read_label(path: str | Path, n_points: int | None = None) -> np.ndarray:
+    """Read a ``.label`` file.
+
+    Parameters
+    ----------
+    path : the ``.label`` file (little-endian uint32 per point).
+    n_points : the number of points of the scan the labels belong to; checked when given.
+
+    Returns
+    -------
+    (N,) uint32 array (semantic class in the low 16 bits, instance id in the high 16 bits).
+
+    Raises
+    ------
+    FlicInputError
+        When the file is missing, its size is not a multiple of 4 bytes or the count differs from
+        ``n_points``.
+    """
+    data = read_bytes(path)
+    if len(data) % 4:
+        raise FlicInputError(
+            path, f"size {len(data)} bytes is not a multiple of 4 (one uint32 label per point)"
+        )
+    labels = np.frombuffer(data, dtype="<u4").astype(np.uint32)
+    if n_points is not None and labels.size != n_points:
+        raise FlicInputError(path, f"holds {labels.size} labels but the scan has {n_points} points")
+    return labels
+
+
+def read_scan(bin_path: str | Path, label_path: str | Path | None = None) -> Scan:
+    """Read and validate a scan and, optionally, its labels.
+
+    Points with a NaN or infinite coordinate are dropped, from the labels too, with a warning
+    that counts them.
+
+    Parameters
+    ----------
+    bin_path : the ``.bin`` file.
+    label_path : its ``.label`` file, or None.
+
+    Returns
+    -------
+    Scan
+
+    Raises
+    ------
+    FlicInputError
+        On any problem of :func:`read_bin` or :func:`read_label`, or when no point has finite
+        coordinates.
+    """
+    raw = read_bin(bin_path)
+    labels = None if label_path is None else read_label(label_path, raw.shape[0])
+    keep = np.isfinite(raw[:, :3]).all(axis=1)
+    n_bad = raw.shape[0] - int(keep.sum())
+    if n_bad == raw.shape[0]:
+        raise FlicInputError(bin_path, f"none of its {n_bad} points has finite coordinates")
+    if n_bad:
+        warnings.warn(
+            f"{bin_path}: dropped {n_bad} of {raw.shape[0]} points with NaN or infinite "
+            "coordinates",
+            stacklevel=2,
+        )
+        raw = raw[keep]
+        labels = None if labels is None else labels[keep]
+    return Scan(np.ascontiguousarray(raw[:, :3]), np.ascontiguousarray(raw[:, 3]), labels)
+
+
+def semantic(labels: np.ndarray) -> np.ndarray:
+    """Semantic class ids (low 16 bits) of encoded labels."""
+    return np.asarray(labels, dtype=np.uint32) & 0xFFFF
+
+
+def instance(labels: np.ndarray) -> np.ndarray:
+    """Instance ids (high 16 bits) of encoded labels; 0 = none."""
+    return np.asarray(labels, dtype=np.uint32) >> 16
+
+
+def encode_labels(semantic_ids: np.ndarray, instance_ids: np.ndarray) -> np.ndarray:
+    """Encode semantic and instance ids as SemanticKITTI labels.
+
+    Parameters
+    ----------
+    semantic_ids, instance_ids : (N,) integer arrays with values in ``0..65535``.
+
+    Returns
+    -------
+    (N,) uint32 array ``instance << 16 | semantic``.
+    """
+    sem = np.asarray(semantic_ids, dtype=np.int64)
+    ins = np.asarray(instance_ids, dtype=np.int64)
+    for name, ids in (("semantic", sem), ("instance", ins)):
+        if ids.size and (ids.min() < 0 or ids.max() > 0xFFFF):
+            raise ValueError(
+                f"{name} ids must lie in 0..65535 to fit 16 bits, got {ids.min()}..{ids.max()}"
+            )
+    return ((ins << 16) | sem).astype(np.uint32)
+
+
+def write_bin(path: str | Path, points: np.ndarray) -> None:
+    """Write a ``.bin`` scan atomically.
+
+    Parameters
+    ----------
+    path : the file to write.
+    points : (N, 3) or (N, 4) array: x, y, z in metres and, in the 4th column, remission (0 when
+        absent).
+    """
+    points = np.asarray(points, dtype=np.float32)
+    if points.ndim != 2 or points.shape[1] not in (3, 4):
+        raise ValueError(f"points must have shape (N, 3) or (N, 4), got {points.shape}")
+    out = np.zeros((points.shape[0], 4), dtype="<f4")
+    out[:, : points.shape[1]] = points
+    atomic_write_bytes(path, out.tobytes())
+
+
+def write_label(path: str | Path, labels: np.ndarray) -> None:
+    """Write (N,) encoded uint32 labels (:func:`encode_labels`) as a ``.label`` file atomically."""
+    atomic_write_bytes(path, np.asarray(labels, dtype="<u4").tobytes())
+
+
+# ---------------------------------------------------------------------------------------------
+# Calibration and poses
+# ---------------------------------------------------------------------------------------------
+
+
+def _numbers(path: str | Path, lineno: int, tokens: list[str], what: str) -> np.ndarray:
+    """Twelve numbers of one line as a (3, 4) float64 matrix."""
+    if len(tokens) != 12:
+        raise FlicInputError(path, f"line {lineno}: {what} has {len(tokens)} numbers, expected 12")
+    values = []
+    for token in tokens:
+        try:
+            values.append(float(token))
+        except ValueError:
+            raise FlicInputError(
+                path, f"line {lineno}: {what}: {token!r} is not a number"
+            ) from None
+    return np.array(values).reshape(3, 4)
+
+
+def read_calib(path: str | Path) -> dict[str, np.ndarray]:
+    """Read a KITTI ``calib.txt``.
+
+    Parameters
+    ----------
+    path : lines ``KEY: 12 numbers`` (``P0``..``P3`` camera projections, ``Tr`` velodyne to camera).
+
+    Returns
+    -------
+    dict mapping each key to its (3, 4) float64 matrix (``Tr`` in metres).
+    """
+    calib: dict[str, np.ndarray] = {}
+    for lineno, line in enumerate(read_text(path).splitlines(), start=1):
+        if not line.strip():
+            continue
+        key, sep, rest = line.partition(":")
+        if not sep or not key.strip():
+            raise FlicInputError(path, f"line {lineno}: expected 'KEY: 12 numbers'")
+        calib[key.strip()] = _numbers(path, lineno, rest.split(), key.strip())
+    if not calib:
+        raise FlicInputError(path, "holds no calibration entries")
+    return calib
+
+
+def write_calib(path: str | Path, calib: dict[str, np.ndarray]) -> None:
+    """Write a KITTI ``calib.txt`` (each value a (3, 4) matrix) atomically."""
+    lines = [
+        f"{key}: " + " ".join(f"{v:.12e}" for v in np.asarray(m, dtype=np.float64).reshape(12))
+        for key, m in calib.items()
+    ]
+    atomic_write_bytes(path, ("\n".join(lines) + "\n").encode())
+
+
+def read_poses(path: str | Path) -> np.ndarray:
+    """Read a KITTI ``poses.txt``: one 3x4 pose (12 numbers, row-major) per line.
+
+    Returns
+    -------
+    (F, 3, 4) float64 array, translations in metres.
+    """
+    poses = [
+        _numbers(path, lineno, line.split(), "pose")
+        for lineno, line in enumerate(read_text(path).splitlines(), start=1)
+        if line.strip()
+    ]
+    if not poses:
+        raise FlicInputError(path, "holds no poses")
+    return np.stack(poses)
+
+
+def write_poses(path: str | Path, poses: np.ndarray) -> None:
+    """Write (F, 3, 4) poses as a KITTI ``poses.txt`` atomically."""
+    poses = np.asarray(poses, dtype=np.float64)
+    if poses.ndim != 3 or poses.shape[1:] != (3, 4):
+        raise ValueError(f"poses must have shape (F, 3, 4), got {poses.shape}")
+    text = "".join(" ".join(f"{v:.12e}" for v in p.reshape(12)) + "\n" for p in poses)
+    atomic_write_bytes(path, text.encode())
+
+
+# ---------------------------------------------------------------------------------------------
+# Predictions
+# ---------------------------------------------------------------------------------------------
+
+
+def predictions_path(out_root: str | Path, sequence: str, frame: int) -> Path:
+    """``<out_root>/sequences/<sequence>/predictions/<frame:06d>.label``."""
+    return Path(out_root) / "sequences" / sequence / "predictions" / f"{frame:06d}.label"
+
+
+def write_predictions(
+    out_root: str | Path, sequence: str, frame: int, cluster_ids: np.ndarray
+) -> Path:
+    """Write one frame's cluster ids as a ``.label`` file (id in the upper 16 bits, semantic 0).
+
+    Parameters
+    ----------
+    out_root : the output root.
+    sequence, frame : which frame.
+    cluster_ids : (N,) integers in ``0..65535``, one per point of the scan, 0 = unclustered.
+
+    Returns
+    -------
+    The written file (see :func:`predictions_path`).
+    """
+    ids = np.asarray(cluster_ids)
+    path = predictions_path(out_root, sequence, frame)
+    write_label(path, encode_labels(np.zeros_like(ids), ids))
+    return path
+
+
+def read_predictions(
+    out_root: str | Path, sequence: str, frame: int, n_points: int | None = None
+) -> np.ndarray:
+    """Read one frame's cluster ids written by :func:`write_predictions`.
+
+    Returns
+    -------
+    (N,) int32 cluster ids, 0 = unclustered.
+    """
+    path = predictions_path(out_root, sequence, frame)
+    return instance(read_label(path, n_points)).astype(np.int32)
+
+
+# ---------------------------------------------------------------------------------------------
+# Dataset
+# ---------------------------------------------------------------------------------------------
+
+
+def is_semantickitti(path: Path) -> bool:
+    """True when ``path`` is a SemanticKITTI root (``sequences/``) or sequence (``velodyne/``)."""
+    return (path / "sequences").is_dir() or (path / "velodyne").is_dir()
+
+
+def _sequence_dirs(root: Path) -> dict[str, Path]:
+    """The sequences of a root (its ``sequences/*`` with ``velodyne/``) or the sequence itself."""
+    if (root / "velodyne").is_dir():
+        return {root.name: root}
+    return {d.name: d for d in sorted((root / "sequences").iterdir()) if (d / "velodyne").is_dir()}
+
+
+def in_frames(frame: int, frames: tuple[int | None, int | None] | None) -> bool:
+    """True when ``frame`` lies in ``frames = (start, stop)`` (stop exclusive, None = open)."""
+    if frames is None:
+        return True
+    start, stop = frames
+    return (start is None or frame >= start) and (stop is None or frame < stop)
+
+
+def frames_text(frames: tuple[int | None, int | None]) -> str:
+    """``(10, None)`` -> ``"10:"``: a frame range as the command line writes it."""
+    start, stop = frames
+    return f"{'' if start is None else start}:{'' if stop is None else stop}"
+
+
+class SemanticKittiDataset:
+    """A SemanticKITTI dataset root or sequence folder (implements :class:`Dataset`).
+
+    Parameters
+    ----------
+    root : a folder with ``sequences/<NN>/velodyne/`` or a single sequence folder with
+        ``velodyne/`` (its sequence name is the folder's name).
+    sequences : the sequences to use (``["00", "08"]``); None = all.
+    frames : ``(start, stop)`` frame numbers, start inclusive, stop exclusive, either None for
+        open; None = all frames.
+    require_labels : fail when a selected frame has no ``labels/<XXXXXX>.label``.
+
+    Raises
+    ------
+    FlicInputError
+        When a requested sequence does not exist, no frame is selected or labels are missing
+        although required.
+    """
+
+    format = FORMAT
+
+    def __init__(
+        self,
+        root: str | Path,
+        sequences: list[str] | None = None,
+        frames: tuple[int | None, int | None] | None = None,
+        require_labels: bool = False,
+    ) -> None:
+        self.root = Path(root)
+        if not is_semantickitti(self.root):
+            raise FlicInputError(
+                self.root, "is not a SemanticKITTI root or sequence (no sequences/ or velodyne/)"
+            )
+        found = _sequence_dirs(self.root)
+        if not found:
+            raise FlicInputError(self.root, "has no sequences/<NN>/velodyne/ folders")
+        if sequences is not None:
+            unknown = [s for s in sequences if s not in found]
+            if unknown:
+                raise FlicInputError(
+                    self.root,
+                    f"no sequence {', '.join(unknown)} (found: {', '.join(found) or 'none'})",
+                )
+            found = {s: found[s] for s in sorted(set(sequences))}
+        self._refs: list[FrameRef] = []
+        for name, seq_dir in found.items():
+            for bin_path in sorted((seq_dir / "velodyne").glob("*.bin")):
+                if not bin_path.stem.isdigit() or not in_frames(int(bin_path.stem), frames):
+                    continue
+                label_path = seq_dir / "labels" / f"{bin_path.stem}.label"
+                self._refs.append(
+                    FrameRef(
+                        name,
+                        int(bin_path.stem),
+                        bin_path,
+                        label_path if label_path.is_file() else None,
+                        FORMAT,
+                    )
+                )
+        if not self._refs:
+            what = "" if frames is None else f" in frames {frames_text(frames)}"
+            raise FlicInputError(
+                self.root, f"no scans (velodyne/*.bin){what} in sequences {', '.join(found)}"
+            )
+        missing = [r for r in self._refs if r.label_path is None]
+        if require_labels and missing:
+            names = ", ".join(
+                str((r.path.parents[1] / "labels" / f"{r.path.stem}.label").relative_to(self.root))
+                for r in missing[:3]
+            )
+            more = f" and {len(missing) - 3} more" if len(missing) > 3 else ""
+            raise FlicInputError(self.root, f"missing label files: {names}{more}")
+
+    def refs(self) -> list[FrameRef]:
+        """Every selected frame, ordered by sequence then frame number."""
+        return list(self._refs)
+
+    def load(self, ref: FrameRef) -> Frame:
+        """Read one frame (points with non-finite coordinates dropped, with a warning)."""
+        scan = read_scan(ref.path, ref.label_path)
+        return Frame(ref, scan.points, scan.labels)
