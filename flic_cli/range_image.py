@@ -100,6 +100,8 @@ class RangeImage:
         (N,) int32 array, 0 for points without a pixel.
         """
         flat = pixel_labels.reshape(-1)
+        if self.projection != "spherical":  # every point has a pixel
+            return flat.take(self.point_pixel).astype(np.int32, copy=False)
         out = np.zeros(self.point_pixel.size, dtype=np.int32)
         has = self.point_pixel >= 0
         out[has] = flat[self.point_pixel[has]]

@@ -85,9 +85,50 @@ def connect_labels(
     n = h * w
     r_flat = ranges.reshape(n)
     m_flat = mask.reshape(n)
+    # Invariant: parent[i] <= i (unions hang the larger root under the smaller), so one ascending
+    # pass flattens every tree and the root of a component is its first pixel in raster order.
     parent = np.arange(n, dtype=np.int32)
     h_step = 2.0 * np.pi / w
-    for m in range(steps.shape[0]):
+
+    # Direct connections: each pixel links to its left and upper neighbour in raster order, so the
+    # first link is a plain assignment; the 360 deg seam is closed afterwards.
+    cv = np.ones(h)
+    sv = np.zeros(h)
+    ch = np.empty(h)
+    sh = np.empty(h)
+    for r in range(h):
+        if r > 0:
+            a = elevation[r - 1] - elevation[r]
+            cv[r] = np.cos(a)
+            sv[r] = np.sin(abs(a))
+        # Two rays of one row, k columns apart: the angle between them shrinks with the row's
+        # elevation (cos = cos^2(el) cos(k d_az) + sin^2(el)).
+        ce2 = np.cos(elevation[r]) ** 2
+        ch[r] = ce2 * np.cos(h_step) + (1.0 - ce2)
+        sh[r] = np.sqrt(max(0.0, 1.0 - ch[r] * ch[r]))
+    for r in range(h):
+        row = r * w
+        for c in range(w):
+            i = row + c
+            if not m_flat[i]:
+                continue
+            d = r_flat[i]
+            if c > 0:
+                j = i - 1
+                if m_flat[j] and _linked(d, r_flat[j], ch[r], sh[r], criterion, param):
+                    parent[i] = _find(parent, j)
+            if r > 0:
+                j = i - w
+                if m_flat[j] and _linked(d, r_flat[j], cv[r], sv[r], criterion, param):
+                    _union(parent, i, j)
+        if w > 1:
+            i = row + w - 1
+            if m_flat[i] and m_flat[row]:
+                if _linked(r_flat[i], r_flat[row], ch[r], sh[r], criterion, param):
+                    _union(parent, i, row)
+
+    # Map Connections (steps[0] is the direct set, done above).
+    for m in range(1, steps.shape[0]):
         kr = steps[m, 0]
         kc = steps[m, 1]
         if lattice[m]:
@@ -108,16 +149,14 @@ def connect_labels(
             below = r + kr < h
             if below:
                 a = elevation[r] - elevation[r + kr]
-                cv = np.cos(a)
-                sv = np.sin(abs(a))
+                cvm = np.cos(a)
+                svm = np.sin(abs(a))
             else:
-                cv = 1.0
-                sv = 0.0
-            # Two rays of one row, kc columns apart: the angle between them shrinks with the
-            # row's elevation (cos = cos^2(el) cos(d_az) + sin^2(el)).
+                cvm = 1.0
+                svm = 0.0
             ce2 = np.cos(elevation[r]) ** 2
-            ch = ce2 * np.cos(kc * h_step) + (1.0 - ce2)
-            sh = np.sqrt(max(0.0, 1.0 - ch * ch))
+            chm = ce2 * np.cos(kc * h_step) + (1.0 - ce2)
+            shm = np.sqrt(max(0.0, 1.0 - chm * chm))
             cw = ce2 * np.cos(wrap_cols * h_step) + (1.0 - ce2)
             sw = np.sqrt(max(0.0, 1.0 - cw * cw))
             row = r * w
@@ -128,7 +167,7 @@ def connect_labels(
                 d1 = r_flat[i]
                 if below:
                     j = i + kr * w
-                    if m_flat[j] and _linked(d1, r_flat[j], cv, sv, criterion, param):
+                    if m_flat[j] and _linked(d1, r_flat[j], cvm, svm, criterion, param):
                         _union(parent, i, j)
                 if lattice[m] and c == last:
                     j = row + c0
@@ -136,21 +175,28 @@ def connect_labels(
                         _union(parent, i, j)
                 else:
                     j = row + (c + kc) % w
-                    if j != i and m_flat[j] and _linked(d1, r_flat[j], ch, sh, criterion, param):
+                    if j != i and m_flat[j] and _linked(d1, r_flat[j], chm, shm, criterion, param):
                         _union(parent, i, j)
+
+    # Flatten (ascending order, see the invariant) and count sizes in one pass.
     size = np.zeros(n, dtype=np.int32)
     for i in range(n):
         if m_flat[i]:
-            size[_find(parent, i)] += 1
+            root = parent[parent[i]]
+            parent[i] = root
+            size[root] += 1
+    # Number the kept components in raster order of their first pixel; size[root] < 0 marks a
+    # numbered root (-label).
     labels = np.zeros(n, dtype=np.int32)
-    root_label = np.zeros(n, dtype=np.int32)
     k = 0
     for i in range(n):
         if m_flat[i]:
-            root = _find(parent, i)
-            if size[root] >= min_size:
-                if root_label[root] == 0:
-                    k += 1
-                    root_label[root] = k
-                labels[i] = root_label[root]
+            root = parent[i]
+            s = size[root]
+            if s < 0:
+                labels[i] = -s
+            elif s >= min_size:
+                k += 1
+                size[root] = -k
+                labels[i] = k
     return labels.reshape(h, w)

@@ -1,0 +1,95 @@
+"""``flic segment`` and ``flic sample``."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from flic_cli.cli.app import (
+    ConfigOpt,
+    DataArg,
+    FramesOpt,
+    SequencesOpt,
+    SettingOpt,
+    _data_or_sample,
+    _selection,
+    app,
+    friendly_errors,
+)
+
+
+@app.command(
+    epilog=(
+        "Examples:\n\n"
+        "- `flic segment` (the synthetic sample, FLIC without MC)\n\n"
+        "- `flic segment ~/kitti --sequences 08 --frames 0:500 --method flic --mc 14 "
+        "--out pred/`\n\n"
+        "- `flic segment ~/moosmann/log1 --method bogoslavskyi --render 10 --out pred/`"
+    )
+)
+@friendly_errors
+def segment(
+    data: DataArg = None,
+    method: Annotated[
+        str,
+        typer.Option(help="`flic`, `bogoslavskyi`, `dbscan` or any [methods.NAME] of the config."),
+    ] = "flic",
+    mc: Annotated[
+        int | None, typer.Option(help="Map Connections for `--method flic`: 0, 1, 6 or 14.")
+    ] = None,
+    out: Annotated[Path, typer.Option(help="Output root for sequences/NN/predictions/.")] = Path(
+        "flic-out/segment"
+    ),
+    sequences: SequencesOpt = None,
+    frames: FramesOpt = None,
+    setting: SettingOpt = "ground",
+    config: ConfigOpt = None,
+    ground_remover: Annotated[
+        str,
+        typer.Option(
+            help="`own` (each method's own, e.g. Bogoslavskyi's for bogoslavskyi), `paper` or "
+            "`bogoslavskyi`."
+        ),
+    ] = "own",
+    render: Annotated[
+        int | None,
+        typer.Option(help="Also write a PNG of this frame number, coloured by cluster."),
+    ] = None,
+) -> None:
+    """Segment scans and write predictions in SemanticKITTI `.label` encoding
+    (cluster id in the upper 16 bits, 0 = unclustered) under `OUT/sequences/NN/predictions/`."""
+    from flic_cli.config import load_config
+    from flic_cli.runs.pipeline import resolve_method
+    from flic_cli.runs.segment import run_segment
+
+    cfg = load_config(config)
+    seqs, frm = _selection(sequences, frames)
+    summary = run_segment(
+        _data_or_sample(data),
+        out,
+        resolve_method(method, mc),
+        cfg,
+        setting,
+        seqs,
+        frm,
+        ground_remover,
+        render,
+    )
+    typer.echo(summary.line())
+
+
+@app.command(epilog="Example: `flic sample /tmp/flic-sample --frames 50`")
+@friendly_errors
+def sample(
+    out: Annotated[Path, typer.Argument(help="Output folder.")],
+    frames: Annotated[int, typer.Option("--frames", help="Number of frames.")] = 20,
+    seed: Annotated[int, typer.Option(help="Scene seed.")] = 0,
+) -> None:
+    """Write the deterministic synthetic sample: a SemanticKITTI sequence (with labels) and the
+    same scenes as a Moosmann-style log (16-bit PNG + img.cfg)."""
+    from flic_cli.sample import write_sample
+
+    paths = write_sample(out, frames=frames, seed=seed)
+    typer.echo(f"wrote {frames} frames: {paths.kitti_root} and {paths.moosmann_log}")
