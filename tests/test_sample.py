@@ -1,0 +1,207 @@
+"""Tests of the embedded synthetic sample (scene generator, ray caster, writers)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+from PIL import Image
+
+from flic_cli import sample
+from flic_cli.range_image import project_points
+
+FRAMES = 3
+GROUND = (40, 44, 48, 49, 60, 72)
+THINGS = (10, 11, 13, 15, 16, 18, 20, 30, 31, 32, *range(252, 260))
+
+
+@pytest.fixture(scope="module")
+def written(tmp_path_factory: pytest.TempPathFactory) -> sample.SamplePaths:
+    return sample.write_sample(tmp_path_factory.mktemp("sample"), frames=FRAMES, seed=0)
+
+
+def _read(paths: sample.SamplePaths, k: int) -> tuple[np.ndarray, np.ndarray]:
+    seq = paths.kitti_sequence
+    pts = np.fromfile(seq / "velodyne" / f"{k:06d}.bin", dtype="<f4").reshape(-1, 4)
+    labels = np.fromfile(seq / "labels" / f"{k:06d}.label", dtype="<u4")
+    return pts, labels
+
+
+def _files(root: Path) -> dict[str, bytes]:
+    return {
+        str(p.relative_to(root)): p.read_bytes() for p in sorted(root.rglob("*")) if p.is_file()
+    }
+
+
+def test_pitch_table() -> None:
+    p = sample.HDL64_PITCH_DEG
+    assert p.shape == (64,)
+    assert p[0] == pytest.approx(-1.9367) and p[-1] == pytest.approx(24.9992)
+    assert np.all(np.diff(p) > 0)
+    assert np.diff(p[:32]).mean() == pytest.approx(1 / 3, abs=0.02)
+    assert np.diff(p[32:]).mean() == pytest.approx(0.5, abs=0.03)
+
+
+def test_deterministic(tmp_path: Path, written: sample.SamplePaths) -> None:
+    again = sample.write_sample(tmp_path, frames=FRAMES, seed=0)
+    root_a = written.kitti_root.parent
+    a, b = _files(root_a), _files(again.kitti_root.parent)
+    assert a.keys() == b.keys()
+    assert all(a[k] == b[k] for k in a)
+    assert again.kitti_root == tmp_path / "semantickitti"
+    assert again.moosmann_log == tmp_path / "moosmann"
+
+
+def test_frames_differ() -> None:
+    r0, _, _ = sample.cast(
+        sample.make_scene(0, 0),
+        sample.HDL64_PITCH_DEG,
+        sample.moosmann_azimuths(),
+        np.random.default_rng(0),
+    )
+    r1, _, _ = sample.cast(
+        sample.make_scene(0, 1),
+        sample.HDL64_PITCH_DEG,
+        sample.moosmann_azimuths(),
+        np.random.default_rng(0),
+    )
+    assert np.mean(np.abs(r0 - r1) > 0.1) > 0.05
+    assert sample.make_scene(0, 1).pose[0, 3] == pytest.approx(1.0)
+
+
+def test_kitti_files(written: sample.SamplePaths) -> None:
+    seq = written.kitti_sequence
+    for k in range(FRAMES):
+        size = (seq / "velodyne" / f"{k:06d}.bin").stat().st_size
+        assert size % 16 == 0
+        assert (seq / "labels" / f"{k:06d}.label").stat().st_size == size // 4
+    assert len((seq / "poses.txt").read_text().splitlines()) == FRAMES
+    assert len((seq / "times.txt").read_text().splitlines()) == FRAMES
+    for line in (seq / "poses.txt").read_text().splitlines():
+        assert len(line.split()) == 12
+    calib = dict(line.split(":", 1) for line in (seq / "calib.txt").read_text().splitlines())
+    assert set(calib) == {"P0", "P1", "P2", "P3", "Tr"}
+    assert all(len(v.split()) == 12 for v in calib.values())
+
+
+def test_scan_order_gives_64_rings(written: sample.SamplePaths) -> None:
+    for k in range(FRAMES):
+        pts, _ = _read(written, k)
+        assert np.all(np.linalg.norm(pts[:, :3], axis=1) > 0)
+        img = project_points(pts, width=2048, mode="rings")
+        assert img.projection == "rings"
+        assert img.shape == (64, 2048)
+        assert img.coverage > 0.97
+        # Row elevations follow the sensor table.
+        assert np.allclose(np.degrees(img.elevation), -sample.HDL64_PITCH_DEG, atol=0.05)
+
+
+def test_labels(written: sample.SamplePaths) -> None:
+    for k in range(FRAMES):
+        pts, labels = _read(written, k)
+        sem, inst = labels & 0xFFFF, labels >> 16
+        assert np.any(sem == 40) and np.any(sem == 10)
+        assert np.all(sem > 0)
+        assert not np.any(inst[~np.isin(sem, THINGS)])
+        assert np.all(inst[np.isin(sem, THINGS)] > 0)
+        assert 0.0 <= pts[:, 3].min() and pts[:, 3].max() <= 1.0
+        # An instance id belongs to one class only.
+        for i in np.unique(inst[inst > 0]):
+            assert np.unique(sem[inst == i]).size == 1
+
+
+def test_moosmann_log(written: sample.SamplePaths) -> None:
+    log = written.moosmann_log
+    cfg = [ln for ln in (log / "img.cfg").read_text().splitlines() if not ln.startswith("#")]
+    fields = [f.strip() for f in cfg[0].split(";") if f.strip()]
+    assert fields[:4] == ["870", "64", "180", "-180"]
+    assert np.allclose([float(f) for f in fields[4:]], sample.HDL64_PITCH_DEG, atol=1e-4)
+    for k in range(FRAMES):
+        with Image.open(log / f"scan{k:05d}.png") as im:
+            assert im.mode in ("I;16", "I;16B", "I;16L")
+            assert im.size == (870, 64)
+            img = np.asarray(im)
+        valid = int(np.count_nonzero(img))
+        assert 40000 <= valid <= 48000
+        assert img.max() <= sample.MAX_RANGE_M * 500 + 100
+        sem, inst = written.moosmann_truth(k)
+        assert sem.shape == (64, 870) and inst.shape == (64, 870)
+        assert np.array_equal(sem > 0, img > 0)
+
+
+def test_moosmann_geometry_matches_kitti() -> None:
+    """Column c of the Moosmann image looks at yaw +180 - 360 c / 869 deg."""
+    az = sample.moosmann_azimuths()
+    assert np.degrees(az[0]) == pytest.approx(180.0) and np.degrees(az[-1]) == pytest.approx(-180)
+    scene = sample.make_scene(0, 0)
+    r, _, _ = sample.cast(scene, sample.HDL64_PITCH_DEG, az, np.random.default_rng(1))
+    # The lowest beam looking straight ahead (columns ~434.5) hits the rising road at
+    # r = h / (sin(pitch) + slope cos(pitch)); looking back (column 0) the road falls away.
+    pitch = np.radians(sample.HDL64_PITCH_DEG[-1])
+    slope = scene.ground.slope
+    for cols, sgn in ((slice(433, 437), 1.0), (slice(0, 2), -1.0)):
+        expect = sample.SENSOR_HEIGHT_M / (np.sin(pitch) + sgn * slope * np.cos(pitch))
+        got = r[-1, cols]
+        got = got[got > 0]
+        assert got.size and np.all(np.abs(got - expect) < 0.06)
+
+
+def test_car_roofs(written: sample.SamplePaths) -> None:
+    """Car roofs: car points high above the road on horizontal surfaces, above a window gap."""
+    found = 0
+    for k in range(FRAMES):
+        pts, labels = _read(written, k)
+        img = project_points(pts)
+        sem = np.zeros(img.ranges.size, dtype=np.int64)
+        sem[img.point_pixel] = labels & 0xFFFF
+        sem = sem.reshape(img.shape)
+        z = img.heights()
+        r = img.ranges
+        car = (sem == 10) & (r > 0)
+        high = car & (z > -0.4)
+        assert np.any(high)
+        # Vertically adjacent roof pixels: same height, different range -> horizontal surface.
+        pair = high[:-1] & high[1:]
+        dz = np.abs(z[:-1] - z[1:])
+        dr = np.abs(r[:-1] - r[1:])
+        found += int(np.count_nonzero(pair & (dz < 0.05) & (dr > 0.1)))
+    assert found > 20
+
+
+def test_instances_and_scene_content() -> None:
+    scene = sample.make_scene(0, 0)
+    classes = {p.semantic for p in [*scene.boxes, *scene.cylinders]}
+    assert {50, 51, 70, 71, 80, 10, 252, 30, 11} <= classes
+    things = scene.instances
+    assert all(c in THINGS for c in things.values())
+    assert 8 <= sum(c in (10, 18) for c in things.values()) <= 14
+    assert 1 <= sum(c == 252 for c in things.values()) <= 3
+    assert 3 <= sum(c == 30 for c in things.values()) <= 6
+    for p in [*scene.boxes, *scene.cylinders]:
+        assert (p.instance > 0) == (p.semantic in THINGS)
+
+
+def test_ensure_sample(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    target = tmp_path / "cache" / "sample"
+    monkeypatch.setenv("FLIC_SAMPLE_DIR", str(target))
+    assert sample.default_sample_dir() == target
+    first = sample.ensure_sample(frames=2, seed=0)
+    assert (target / ".complete").is_file()
+    assert first.kitti_root == target / "semantickitti"
+    assert (first.kitti_sequence / "velodyne" / "000001.bin").is_file()
+    assert (first.moosmann_log / "scan00001.png").is_file()
+    stamp = (target / "moosmann" / "scan00000.png").stat().st_mtime_ns
+    again = sample.ensure_sample(frames=2, seed=0)
+    assert again.kitti_root == first.kitti_root
+    assert (target / "moosmann" / "scan00000.png").stat().st_mtime_ns == stamp
+    # No temporary folders are left beside the sample.
+    assert [p.name for p in target.parent.iterdir()] == ["sample"]
+    # Ground truth is available after a reuse too (recomputed deterministically).
+    sem, _ = again.moosmann_truth(1)
+    assert np.array_equal(sem, first.moosmann_truth(1)[0])
+
+
+def test_default_sample_dir(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.delenv("FLIC_SAMPLE_DIR", raising=False)
+    assert sample.default_sample_dir() == Path.home() / ".cache" / "flic" / "sample-v1"
