@@ -2,7 +2,7 @@
 
 Layout (one job per module):
 
-- ``flic_cli.io``         reading and writing data formats (SemanticKITTI, Moosmann logs, predictions)
+- ``flic_cli.io``         reading and writing formats (SemanticKITTI, Moosmann logs, predictions)
 - ``flic_cli.range_image`` the range image shared by every image method (ring recovery, projection)
 - ``flic_cli.ground``     ground extraction (paper, Bogoslavskyi & Stachniss, by label)
 - ``flic_cli.methods``    the clusterers (FLIC with Map Connections, Bogoslavskyi, DBSCAN)

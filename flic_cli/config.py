@@ -1,4 +1,4 @@
-"""Configuration: the documented defaults in ``configs/default.toml``, overridden by ``--config``."""
+"""Configuration: the documented defaults in ``configs/default.toml``, overridden by --config."""
 
 from __future__ import annotations
 

@@ -23,7 +23,8 @@ def save_figure(fig, path: Path) -> None:
     """Write a figure atomically (temporary name, then rename) and close it."""
     plt = _pyplot()
     with atomic_write(path) as tmp:
-        fig.savefig(tmp, dpi=120, bbox_inches="tight", format=Path(path).suffix.lstrip(".") or "png")
+        fmt = Path(path).suffix.lstrip(".") or "png"
+        fig.savefig(tmp, dpi=120, bbox_inches="tight", format=fmt)
     plt.close(fig)
 
 
@@ -70,4 +71,77 @@ def render_segmentation(
     ax.set_xlabel("column (azimuth +180 deg ... -180 deg)")
     ax.set_ylabel("row (beam, top first)")
     ax.set_title(title or f"{k} clusters; grey = ground, dark grey = unclustered")
+    save_figure(fig, path)
+
+
+# ---- flic benchmark (paper Fig. 9 and 10) ----------------------------------------------------
+
+
+def plot_runtime_series(
+    series: dict[str, tuple[np.ndarray, np.ndarray]], path: Path, title: str = ""
+) -> None:
+    """Per-frame runtime over the log, log scale (paper Fig. 9).
+
+    Parameters
+    ----------
+    series : method -> (frame indices, milliseconds).
+    path : output PNG.
+    """
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(12, 4.5))
+    for name, (x, ms) in series.items():
+        sparse = len(x) > 1 and np.median(np.diff(x)) > 1
+        ax.plot(x, ms, lw=0.8, marker="o" if sparse or len(x) < 50 else None, ms=3, label=name)
+    ax.set_yscale("log")
+    ax.xaxis.get_major_locator().set_params(integer=True)
+    ax.set_xlabel("frame (position in the log)")
+    ax.set_ylabel("runtime per frame [ms]")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(loc="upper left", bbox_to_anchor=(1.0, 1.0), fontsize="small")
+    ax.set_title(title)
+    save_figure(fig, path)
+
+
+def plot_hz_boxplot(hz: dict[str, np.ndarray], path: Path, title: str = "") -> None:
+    """Box plot of the per-frame rate in Hz, one box per method (paper Fig. 10).
+
+    Parameters
+    ----------
+    hz : method -> per-frame rates (1000 / milliseconds).
+    path : output PNG.
+    """
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(max(5, 1.3 * len(hz) + 2), 4.5))
+    ax.boxplot(list(hz.values()), showfliers=True, flierprops={"markersize": 2})
+    ax.set_xticks(range(1, len(hz) + 1), list(hz), rotation=30, ha="right")
+    ax.set_yscale("log")
+    ax.set_ylabel("frame rate [Hz]")
+    ax.grid(True, axis="y", which="both", alpha=0.3)
+    ax.set_title(title)
+    save_figure(fig, path)
+
+
+def plot_runtime_histogram(
+    counts: dict[str, np.ndarray], edges: np.ndarray, path: Path, title: str = ""
+) -> None:
+    """Runtime histograms on shared log-spaced bins, one step line per method.
+
+    Parameters
+    ----------
+    counts : method -> frames per bin (``len(edges) - 1`` values).
+    edges : bin edges in milliseconds.
+    path : output PNG.
+    """
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(10, 4.5))
+    used = np.flatnonzero(np.sum(list(counts.values()), axis=0)) if counts else np.array([0])
+    lo, hi = max(used.min() - 1, 0), min(used.max() + 2, len(edges) - 1)
+    for name, c in counts.items():
+        ax.stairs(c, edges, label=name)
+    ax.set_xscale("log")
+    ax.set_xlim(edges[lo], edges[hi])
+    ax.set_xlabel("runtime per frame [ms]")
+    ax.set_ylabel("frames")
+    ax.legend(fontsize="small")
+    ax.set_title(title)
     save_figure(fig, path)

@@ -185,6 +185,7 @@ def project_points(
     rows: int = 64,
     fov_up_deg: float = 3.0,
     fov_down_deg: float = -25.0,
+    keep: np.ndarray | None = None,
 ) -> RangeImage:
     """Project a scan (in sensor scan order) into a range image.
 
@@ -196,10 +197,13 @@ def project_points(
         warning when that fails); ``"spherical"`` bins the elevation uniformly over the vertical
         field of view ``[fov_down_deg, fov_up_deg]``.
     rows : number of rows (beams).
+    keep : (N,) bool, the points that go into the image (e.g. all but the ground classes). Rows
+        are recovered from the whole scan, so removing points does not break the ring recovery.
 
     Returns
     -------
     RangeImage
+        Over the kept points: ``point_pixel`` has one entry per kept point.
     """
     if mode not in ("rings", "spherical"):
         raise ValueError(f"unknown projection mode {mode!r} (rings | spherical)")
@@ -218,8 +222,12 @@ def project_points(
         )
     if ring is not None:
         elevation = _row_elevation(elev, ring, rows)
+        if keep is not None:
+            rng, ring, cols = rng[keep], ring[keep], cols[keep]
         ranges, pix = _fill_pixels(rng.astype(np.float32), ring, cols, rows, width)
         return RangeImage(ranges, elevation, pix, "rings")
+    if keep is not None:
+        rng, elev, cols = rng[keep], elev[keep], cols[keep]
     up, down = np.radians(fov_up_deg), np.radians(fov_down_deg)
     r_idx = np.floor((up - elev) / (up - down) * rows).astype(np.int64)
     inside = (r_idx >= 0) & (r_idx < rows) & (rng > 0)
@@ -227,7 +235,7 @@ def project_points(
     ranges, pix_in = _fill_pixels(
         rng[inside].astype(np.float32), r_idx[inside], cols[inside], rows, width
     )
-    pix = np.full(xyz.shape[0], -1, dtype=np.int64)
+    pix = np.full(rng.shape[0], -1, dtype=np.int64)
     pix[inside] = pix_in
     return RangeImage(ranges, elevation, pix, "spherical")
 

@@ -46,3 +46,11 @@ def shared_data() -> Path:
 def kitti_root(shared_data: Path) -> Path:
     """The SemanticKITTI root of the real data (``../shared/data/semantickitti``)."""
     return shared_data / "semantickitti"
+
+
+@pytest.fixture(scope="session")
+def small_sample(tmp_path_factory: pytest.TempPathFactory):
+    """A 3-frame synthetic sample (SemanticKITTI sequence + Moosmann log), written once."""
+    from flic_cli.sample import write_sample
+
+    return write_sample(tmp_path_factory.mktemp("sample"), frames=3)

@@ -19,7 +19,7 @@ _SG = {
 
 @njit(cache=True)
 def _angle_image(ranges: np.ndarray, sin_el: np.ndarray, cos_el: np.ndarray) -> np.ndarray:
-    """Inclination (radians) of the line from each cell to the cell below; 0 where either is empty."""
+    """Inclination (radians) of the line from each cell to the cell below; 0 if either is empty."""
     h, w = ranges.shape
     out = np.zeros((h, w), dtype=np.float32)
     for r in range(h - 1):

@@ -16,10 +16,10 @@ import numpy as np
 from flic_cli.config import build_method, method_ground
 from flic_cli.errors import FlicInputError
 from flic_cli.io.base import Frame, FrameRef
+from flic_cli.metrics import ground_mask
 from flic_cli.range_image import RangeImage, project_points
 
 SETTINGS = ("ground", "no-ground")
-GROUND_CLASSES = np.array([40, 44, 48, 49, 60, 72], dtype=np.uint32)
 
 
 @dataclass
@@ -72,8 +72,7 @@ def prepare(frame: Frame, setting: str, projection: dict[str, Any]) -> Prepared:
                 "the no-ground setting removes the ground classes by label, and this frame has "
                 "no labels (use --setting ground)",
             )
-        keep = ~np.isin(labels & 0xFFFF, GROUND_CLASSES)
-        points, labels = points[keep], labels[keep]
+        keep = ~ground_mask(labels)
     if frame.image is not None and keep is None:
         image = frame.image
     elif frame.image is not None:  # a sensor image with some points removed
@@ -91,7 +90,10 @@ def prepare(frame: Frame, setting: str, projection: dict[str, Any]) -> Prepared:
             rows=int(projection.get("rows", 64)),
             fov_up_deg=float(projection.get("fov_up_deg", 3.0)),
             fov_down_deg=float(projection.get("fov_down_deg", -25.0)),
+            keep=keep,
         )
+    if keep is not None:
+        points, labels = points[keep], labels[keep]
     return Prepared(frame.ref, image, points, labels, keep, frame.points.shape[0])
 
 
@@ -150,7 +152,9 @@ def make_segmenter(
     remover = method_ground(cfg, name) if ground_remover == "own" else ground_remover
     params = dict(cfg.get("ground", {}).get(remover, {}))
     if remover not in cfg.get("ground", {}):
-        raise FlicInputError(None, f"unknown ground remover {remover!r} (paper | bogoslavskyi | own)")
+        raise FlicInputError(
+            None, f"unknown ground remover {remover!r} (paper | bogoslavskyi | own)"
+        )
     return Segmenter(name, method, remover, params)
 
 

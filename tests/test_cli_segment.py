@@ -1,0 +1,129 @@
+"""`flic segment` end to end, on the synthetic sample and the real frames, and its errors."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+from flic_cli.cli import app
+from flic_cli.io import open_dataset, read_predictions
+
+runner = CliRunner()
+METHODS = ["flic0", "flic1", "flic6", "flic14", "bogoslavskyi", "dbscan"]
+
+
+def _segment(*args: str):
+    return runner.invoke(app, ["segment", *map(str, args)])
+
+
+@pytest.mark.parametrize("method", METHODS)
+def test_segment_writes_a_label_file_per_frame(small_sample, tmp_path, method):
+    result = _segment(small_sample.kitti_root, "--method", method, "--out", tmp_path)
+    assert result.exit_code == 0, result.output
+    assert "segmented 3 frames" in result.output
+    ds = open_dataset(small_sample.kitti_root)
+    for ref in ds.refs():
+        n = ds.load(ref).points.shape[0]
+        pred = read_predictions(tmp_path, ref.sequence, ref.frame, n_points=n)
+        raw = np.fromfile(
+            tmp_path / "sequences" / ref.sequence / "predictions" / f"{ref.frame:06d}.label",
+            dtype="<u4",
+        )
+        assert np.all(raw & 0xFFFF == 0) and np.array_equal(raw >> 16, pred)
+        assert pred.max() >= 5  # the street has cars, walls and trees
+
+
+def test_mc_option_selects_the_preset(small_sample, tmp_path):
+    a = _segment(small_sample.kitti_root, "--method", "flic", "--mc", "14", "--out", tmp_path / "a")
+    b = _segment(small_sample.kitti_root, "--method", "flic14", "--out", tmp_path / "b")
+    assert a.exit_code == b.exit_code == 0
+    pa = read_predictions(tmp_path / "a", "00", 0)
+    assert np.array_equal(pa, read_predictions(tmp_path / "b", "00", 0))
+
+
+@pytest.mark.parametrize("method", METHODS)
+def test_segment_moosmann_log(small_sample, tmp_path, method):
+    result = _segment(
+        small_sample.moosmann_log, "--method", method, "--out", tmp_path, "--render", 1
+    )
+    assert result.exit_code == 0, result.output
+    files = sorted((tmp_path / "sequences").glob("*/predictions/*.label"))
+    assert len(files) == 3
+    assert list(tmp_path.glob("render_*_000001.png"))
+
+
+def test_no_ground_setting_drops_ground_classes(small_sample, tmp_path):
+    result = _segment(small_sample.kitti_root, "--setting", "no-ground", "--out", tmp_path)
+    assert result.exit_code == 0, result.output
+    frame = open_dataset(small_sample.kitti_root).load(
+        open_dataset(small_sample.kitti_root).refs()[0]
+    )
+    pred = read_predictions(tmp_path, "00", 0)
+    ground = np.isin(frame.labels & 0xFFFF, [40, 44, 48, 49, 60, 72])
+    assert pred[ground].max() == 0 and pred[~ground].max() > 0
+
+
+def test_segment_real_frames_with_every_method(kitti_root, tmp_path):
+    for method in ["flic0", "flic14", "bogoslavskyi"]:
+        result = _segment(
+            kitti_root,
+            "--sequences",
+            "04",
+            "--frames",
+            "0:2",
+            "--method",
+            method,
+            "--out",
+            tmp_path / method,
+            "--render",
+            0,
+        )
+        assert result.exit_code == 0, result.output
+        assert "segmented 2 frames" in result.output
+        assert (tmp_path / method / "render_04_000000.png").stat().st_size > 1000
+    result = _segment(
+        kitti_root,
+        "--sequences",
+        "01",
+        "--frames",
+        "0:1",
+        "--method",
+        "dbscan",
+        "--setting",
+        "no-ground",
+        "--out",
+        tmp_path / "dbscan",
+    )
+    assert result.exit_code == 0, result.output
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (["/nonexistent/data"], "/nonexistent/data: does not exist"),
+        (["{kitti}", "--method", "nope"], "unknown method 'nope'"),
+        (["{kitti}", "--method", "dbscan", "--mc", "6"], "--mc applies to --method flic only"),
+        (["{moos}", "--setting", "no-ground"], "has no ground-truth labels"),
+        (["{kitti}", "--frames", "x:y"], "invalid frame range"),
+        (["{kitti}", "--sequences", "07"], "no sequence 07"),
+        (["{kitti}", "--out", "{file}/out"], "not writable"),
+        (["{kitti}", "--config", "{file}"], "is not valid TOML"),
+    ],
+)
+def test_bad_input_is_one_line_exit_2(small_sample, tmp_path, args, message):
+    blocker = tmp_path / "file.txt"
+    blocker.write_text("this is [not toml\n")
+    fill = {
+        "kitti": small_sample.kitti_root,
+        "moos": small_sample.moosmann_log,
+        "file": blocker,
+    }
+    args = [a.format(**fill) for a in args]
+    if "--out" not in args:
+        args += ["--out", str(tmp_path / "out")]
+    result = _segment(*args)
+    assert result.exit_code == 2, result.output
+    lines = [line for line in result.output.splitlines() if line.startswith("error:")]
+    assert len(lines) == 1 and message in lines[0], result.output
+    assert "Traceback" not in result.output

@@ -1,0 +1,83 @@
+"""Ground extraction on the synthetic street, whose labels say what is road and what is a car."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from flic_cli.ground import bogoslavskyi_ground, paper_ground
+from flic_cli.ground.paper import paper_tables
+from flic_cli.io import open_dataset
+from flic_cli.range_image import RangeImage, project_points
+
+
+def _frames(sample):
+    ds = open_dataset(sample.kitti_root)
+    for ref in ds.refs():
+        frame = ds.load(ref)
+        yield frame, project_points(frame.points)
+
+
+def _shares(frame, image, ground):
+    on_ground = ground.reshape(-1)[image.point_pixel]
+    sem = frame.labels & 0xFFFF
+    x, y, z = frame.points.T
+    roofs = np.isin(sem, [10, 252]) & (z > -0.5) & (np.hypot(x, y) < 15)
+    assert roofs.sum() > 500  # the scene has car roofs and hoods in view
+    return on_ground[sem == 40].mean(), on_ground[roofs].mean()
+
+
+def test_paper_ground_removes_the_road_and_keeps_car_roofs(small_sample):
+    for frame, image in _frames(small_sample):
+        road, roofs = _shares(frame, image, paper_ground(image))
+        assert road > 0.9
+        assert roofs < 0.02
+
+
+def test_bogoslavskyi_ground_removes_the_road_and_keeps_car_roofs(small_sample):
+    for frame, image in _frames(small_sample):
+        road, roofs = _shares(frame, image, bogoslavskyi_ground(image))
+        assert road > 0.9
+        assert roofs < 0.02
+
+
+def test_paper_ground_height_line_keeps_a_horizontal_surface_above_it():
+    # A flat plane seen by 8 beams: at the road height (-1.73 m) it is ground; raised to -0.3 m
+    # (a car roof) it is above the 10 deg line from the wheel for the near cells and stays.
+    elevation = np.radians(np.linspace(-8, -22, 8))
+    for height, expect_ground in ((-1.73, True), (-0.3, False)):
+        ranges = (height / np.sin(elevation)).astype(np.float32)[:, None].repeat(16, 1)
+        image = RangeImage(ranges, elevation, np.arange(ranges.size), "native")
+        ground = paper_ground(image)
+        assert ground.all() == expect_ground and ground.any() == expect_ground
+
+
+def test_paper_ground_keeps_a_wall():
+    elevation = np.radians(np.linspace(-2, -20, 10))
+    ranges = (5.0 / np.cos(elevation)).astype(np.float32)[:, None].repeat(8, 1)  # wall 5 m away
+    image = RangeImage(ranges, elevation, np.arange(ranges.size), "native")
+    assert not paper_ground(image).any()
+
+
+def test_paper_tables_accept_the_depression_angle_band():
+    # tan(beta) for a horizontal surface equals tan of the upper beam's depression angle
+    elevation = np.radians([-10.0, -11.0])
+    sin_a, cos_a, tan_lo, tan_hi = paper_tables(elevation, 10.0)
+    d1 = 1.73 / np.sin(np.radians(10.0))
+    d2 = 1.73 / np.sin(np.radians(11.0))
+    tan_beta = d2 * sin_a[1] / (d1 - d2 * cos_a[1])
+    assert np.degrees(np.arctan(tan_beta)) == pytest.approx(10.0, abs=1e-6)
+    assert tan_lo[1] <= tan_beta <= tan_hi[1]
+    assert np.degrees(np.arctan(tan_lo[1])) == pytest.approx(0.0, abs=1e-9)
+    assert np.degrees(np.arctan(tan_hi[1])) == pytest.approx(20.0)
+
+
+def test_empty_pixels_are_never_ground():
+    image = RangeImage(
+        np.zeros((4, 8), np.float32),
+        np.radians([-5, -6, -7, -8.0]),
+        np.zeros(0, np.int64),
+        "native",
+    )
+    assert not paper_ground(image).any()
+    assert not bogoslavskyi_ground(image).any()
