@@ -1,0 +1,58 @@
+"""Projection coverage of the ring recovery vs the spherical projection on SemanticKITTI frames.
+
+Coverage = share of a scan's points that own a pixel of the 64 x WIDTH range image (the others
+share a pixel with a nearer point). Writes ``results/projection_coverage.csv`` and prints the means.
+
+Usage: python scripts/projection_coverage.py [DATA] [--width 2048] [--out CSV]
+"""
+
+from __future__ import annotations
+
+import argparse
+import platform
+from pathlib import Path
+
+import pandas as pd
+from tqdm import tqdm
+
+from flic_cli.io import open_dataset
+from flic_cli.io.atomic import atomic_write
+from flic_cli.range_image import project_points
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("data", nargs="?", default="../shared/data/semantickitti", type=Path)
+    parser.add_argument("--width", type=int, default=2048)
+    parser.add_argument("--out", type=Path, default=Path("results/projection_coverage.csv"))
+    args = parser.parse_args()
+    ds = open_dataset(args.data)
+    rows = []
+    for ref in tqdm(ds.refs(), unit="frame"):
+        pts = ds.load(ref).points
+        rings = project_points(pts, width=args.width)
+        sph = project_points(pts, width=args.width, mode="spherical")
+        rows.append(
+            dict(
+                sequence=ref.sequence,
+                frame=ref.frame,
+                points=len(pts),
+                rows_recovered=rings.shape[0] if rings.projection == "rings" else 0,
+                coverage_rings=round(rings.coverage, 5),
+                coverage_spherical=round(sph.coverage, 5),
+            )
+        )
+    df = pd.DataFrame(rows)
+    with atomic_write(args.out) as tmp:
+        df.to_csv(tmp, index=False)
+    print(
+        f"{len(df)} frames, width {args.width}, {platform.processor() or platform.machine()}: "
+        f"mean coverage rings {100 * df.coverage_rings.mean():.2f}% "
+        f"(min {100 * df.coverage_rings.min():.2f}%), "
+        f"spherical {100 * df.coverage_spherical.mean():.2f}% "
+        f"(min {100 * df.coverage_spherical.min():.2f}%) -> {args.out}"
+    )
+
+
+if __name__ == "__main__":
+    main()
