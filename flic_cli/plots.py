@@ -145,3 +145,46 @@ def plot_runtime_histogram(
     ax.legend(fontsize="small")
     ax.set_title(title)
     save_figure(fig, path)
+
+
+def plot_sweep(
+    values: np.ndarray,
+    iou_mu: np.ndarray,
+    p_mu: np.ndarray,
+    best: int,
+    path: Path,
+    xlabel: str,
+    title: str = "",
+) -> None:
+    """The parameter study curve (paper Fig. 8): IoU_mu and P_mu against a parameter.
+
+    Parameters
+    ----------
+    values : (K,) parameter values.
+    iou_mu, p_mu : (K,) scores in percent.
+    best : index of the best value, marked with a dashed line and its IoU_mu.
+    path : output PNG (written atomically).
+    xlabel : x axis label, with units.
+    title : figure title.
+    """
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(7.5, 4.2))
+    ax.plot(values, iou_mu, "o-", ms=3, color="C0", label="IoU$_\\mu$")
+    ax.plot(values, p_mu, "s:", ms=3, color="C1", label="P$_\\mu$")
+    if len(values):
+        bx, by = float(values[best]), float(iou_mu[best])
+        ax.axvline(bx, color="0.3", ls="--", lw=1)
+        ax.annotate(
+            f"best {bx:g}: IoU$_\\mu$ {by:.2f}%",
+            xy=(bx, by),
+            xytext=(8, -16),
+            textcoords="offset points",
+            fontsize=9,
+        )
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel("score [%]")
+    ax.grid(alpha=0.3)
+    ax.legend(loc="lower right")
+    if title:
+        ax.set_title(title, fontsize=10)
+    save_figure(fig, path)

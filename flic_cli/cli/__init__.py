@@ -4,6 +4,7 @@ To add a command: a module here that decorates its function with ``@app.command(
 modules inside the function), imported below.
 """
 
+from flic_cli.cli import benchmark  # noqa: F401  (registers the commands)
 from flic_cli.cli import segment  # noqa: F401  (registers the commands)
 from flic_cli.cli.app import app
 

@@ -1,0 +1,113 @@
+"""``flic benchmark``: per-frame runtime of the methods (paper section IV-A, Fig. 9 and 10)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from flic_cli.cli.app import (
+    ConfigOpt,
+    DataArg,
+    FramesOpt,
+    SequencesOpt,
+    SettingOpt,
+    _data_or_sample,
+    _selection,
+    app,
+    friendly_errors,
+)
+
+DEFAULT_METHODS = "bogoslavskyi,flic0,flic1,flic6,flic14,dbscan"
+
+
+@app.command(
+    epilog=(
+        "Examples:\n\n"
+        "- `flic benchmark` (the synthetic sample's Moosmann-style log, all six methods)\n\n"
+        "- `flic benchmark ~/moosmann/log1 --out bench/ --dbscan-every 25`\n\n"
+        "- `flic benchmark ~/kitti --sequences 08 --frames 0:500 --methods flic0,flic14 "
+        "--repeat 3`"
+    )
+)
+@friendly_errors
+def benchmark(
+    data: DataArg = None,
+    methods: Annotated[
+        str, typer.Option("--methods", help="Comma-separated [methods.NAME] variants to time.")
+    ] = DEFAULT_METHODS,
+    out: Annotated[
+        Path,
+        typer.Option(help="Output folder for the CSV tables, environment.json and the plots."),
+    ] = Path("flic-out/benchmark"),
+    sequences: SequencesOpt = None,
+    frames: FramesOpt = None,
+    setting: SettingOpt = "ground",
+    config: ConfigOpt = None,
+    ground_remover: Annotated[
+        str,
+        typer.Option(
+            help="`own` (each method's own, e.g. Bogoslavskyi's for bogoslavskyi), `paper` or "
+            "`bogoslavskyi`. Ground extraction is timed as part of every method."
+        ),
+    ] = "own",
+    warmup: Annotated[
+        int,
+        typer.Option(
+            min=0,
+            help="Untimed runs of every method on the first frame (excludes JIT compilation).",
+        ),
+    ] = 3,
+    repeat: Annotated[
+        int, typer.Option(min=1, help="Timed runs per frame and method; the median is kept.")
+    ] = 1,
+    dbscan_every: Annotated[
+        int,
+        typer.Option(
+            "--dbscan-every",
+            min=1,
+            help="Time methods of kind dbscan on every N-th frame only (seconds per frame).",
+        ),
+    ] = 10,
+    threads: Annotated[
+        int,
+        typer.Option(min=1, help="Threads of numba and the BLAS/OpenMP pools while timing."),
+    ] = 1,
+    plots: Annotated[
+        bool, typer.Option("--plots/--no-plots", help="Write runtime.png, boxplot_hz.png, ...")
+    ] = True,
+) -> None:
+    """Time the segmentation of every frame (range image in, labels out, ground extraction
+    included), single-threaded, after a warm-up; file reading and projection are timed as
+    separate stages. Writes `frames.csv`, `summary.csv` (median/mean/p5/p95/p99/max in ms, Hz,
+    p99/median stability, speed-ups), `histogram.csv`, `environment.json` and the plots of the
+    paper's Fig. 9 and 10 into OUT."""
+    # Before numpy/numba are imported: their thread pools read these variables once.
+    from flic_cli.runs.environment import pin_thread_env
+
+    pin_thread_env(threads)
+
+    from flic_cli.config import load_config
+    from flic_cli.runs.benchmark import run_benchmark
+    from flic_cli.runs.pipeline import parse_methods
+
+    cfg = load_config(config)
+    names = parse_methods(methods, cfg)
+    seqs, frm = _selection(sequences, frames)
+    result = run_benchmark(
+        _data_or_sample(data, moosmann=True),
+        out,
+        names,
+        cfg,
+        setting=setting,
+        sequences=seqs,
+        frames=frm,
+        ground_remover=ground_remover,
+        warmup=warmup,
+        repeat=repeat,
+        dbscan_every=dbscan_every,
+        threads=threads,
+        plots=plots,
+    )
+    typer.echo(result.report())

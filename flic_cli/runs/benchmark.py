@@ -1,0 +1,447 @@
+"""``flic benchmark``: per-frame runtime of every method, as in the paper's section IV-A.
+
+Procedure
+---------
+1. Warm-up, on the first frame that loads: every method runs ``warmup`` times, so that JIT
+   compilation (or loading the compiled kernels from numba's on-disk cache) and first-use imports
+   are not timed. The first call's time is recorded separately ("first call incl. JIT/cache
+   load").
+2. Timing, frame after frame (memory stays bounded on long logs): the frame is read (stage
+   ``read``) and projected to its range image (stage ``project``), each timed on its own; then
+   every method segments it (``segmenter(image, points)``: range image in, labels out, ground
+   extraction included). Methods are interleaved per frame, so slow drifts (thermal, other load)
+   affect all of them alike. The garbage collector is disabled during each timed call.
+   ``--repeat R`` times each call R times and keeps the median.
+3. Methods of kind ``dbscan`` run only on frames whose position in the selection is a multiple of
+   ``dbscan_every`` (DBSCAN takes seconds per frame).
+
+Everything runs single-threaded unless ``threads`` says otherwise (numba and the native thread
+pools are limited, see :mod:`flic_cli.runs.environment`).
+
+Outputs (all written atomically)
+--------------------------------
+``frames.csv``
+    One row per (method or stage, timed frame): ``method, index, sequence, frame, milliseconds,
+    points, clusters``. ``index`` is the frame's position in the selection; stages ``read`` and
+    ``project`` have no ``clusters``.
+``summary.csv``
+    One row per method and stage: ``method, kind, frames, median_ms, mean_ms, p5_ms, p95_ms,
+    p99_ms, max_ms, hz_median, hz_mean, stability, points_median, clusters_median`` and
+    ``speedup_vs_<other>`` for every method. ``stability`` = p99 / median. ``speedup_vs_Y`` of
+    method X = median(Y) / median(X) **over the frames both were timed on** (> 1: X is faster), so
+    that DBSCAN, timed on every n-th frame only, is compared with the others on the same frames;
+    between methods timed on every frame it is the ratio of the medians of this table.
+``histogram.csv``
+    ``method, bin_lo_ms, bin_hi_ms, count``: the same :data:`HIST_EDGES_MS` for every method
+    (10 log-spaced bins per decade from 0.01 ms to 100 s; times outside fall into the first or
+    last bin, so the counts of a method sum to its ``frames``).
+``environment.json``
+    CPU, cores, Python and library versions, threads in effect, command line, date, the run's
+    parameters and the warm-up (first-call) times.
+``runtime.png``, ``boxplot_hz.png``, ``histogram.png``
+    Per-frame runtime over the log on a log scale (paper Fig. 9), box plot of the per-frame rate
+    in Hz (Fig. 10), runtime histograms.
+"""
+
+from __future__ import annotations
+
+import gc
+import json
+import time
+import warnings
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pandas as pd
+from tqdm import tqdm
+
+from flic_cli.errors import FlicInputError
+from flic_cli.io import open_dataset
+from flic_cli.io.atomic import atomic_write
+from flic_cli.runs.environment import collect_environment, environment_line, thread_limits
+from flic_cli.runs.pipeline import Segmenter, make_segmenter, prepare
+
+#: The stages timed besides the methods (file reading, projection to the range image).
+STAGES = ("read", "project")
+
+#: Histogram bin edges in milliseconds: 10 log-spaced bins per decade, 0.01 ms to 100 s.
+HIST_EDGES_MS: np.ndarray = np.logspace(-2, 5, 71)
+
+FRAME_COLUMNS = ["method", "index", "sequence", "frame", "milliseconds", "points", "clusters"]
+STAT_COLUMNS = [
+    "method",
+    "kind",
+    "frames",
+    "median_ms",
+    "mean_ms",
+    "p5_ms",
+    "p95_ms",
+    "p99_ms",
+    "max_ms",
+    "hz_median",
+    "hz_mean",
+    "stability",
+    "points_median",
+    "clusters_median",
+]
+PRINT_COLUMNS = [
+    "method",
+    "frames",
+    "median_ms",
+    "mean_ms",
+    "p95_ms",
+    "p99_ms",
+    "max_ms",
+    "hz_median",
+    "hz_mean",
+    "stability",
+]
+
+
+@dataclass
+class BenchmarkResult:
+    """What :func:`run_benchmark` measured and wrote.
+
+    Attributes
+    ----------
+    frames : the ``frames.csv`` table
+    summary : the ``summary.csv`` table
+    histogram : the ``histogram.csv`` table
+    environment : the ``environment.json`` record
+    out : the output folder
+    files : the files written
+    notes : lines worth printing (sub-sampled methods, skipped frames)
+    """
+
+    frames: pd.DataFrame
+    summary: pd.DataFrame
+    histogram: pd.DataFrame
+    environment: dict[str, Any]
+    out: Path
+    files: list[Path] = field(default_factory=list)
+    notes: list[str] = field(default_factory=list)
+
+    def report(self) -> str:
+        """The lines ``flic benchmark`` prints: environment, warm-up, notes, summary, files."""
+        env = self.environment
+        first = env.get("warmup", {}).get("first_call_ms") or {}
+        lines = [f"environment: {environment_line(env)}"]
+        if first:
+            lines.append(
+                "first call incl. JIT/cache load (not in the statistics): "
+                + ", ".join(f"{k} {v:.1f} ms" for k, v in first.items())
+            )
+        lines += self.notes
+        table = self.summary[PRINT_COLUMNS].copy()
+        lines.append(
+            table.to_string(
+                index=False,
+                float_format=lambda x: f"{x:.3g}" if abs(x) < 100 else f"{x:.1f}",
+            )
+        )
+        methods = self.summary.loc[self.summary["kind"] == "method", "method"].tolist()
+        if len(methods) > 1:
+            sp = self.summary.set_index("method").loc[methods, [f"speedup_vs_{m}" for m in methods]]
+            sp.columns = methods
+            sp.index.name = None
+            lines.append(
+                "speed-up (row vs column: column's median / row's median on common frames):"
+            )
+            lines.append(sp.to_string(float_format=lambda x: f"{x:.3g}"))
+        lines.append(f"wrote {', '.join(p.name for p in self.files)} -> {self.out}")
+        return "\n".join(lines)
+
+
+def _timed(func: Callable[[], Any], repeat: int) -> tuple[Any, int]:
+    """Run ``func`` ``repeat`` times with the garbage collector off; (last result, median ns)."""
+    times = []
+    result = None
+    for _ in range(repeat):
+        enabled = gc.isenabled()
+        gc.disable()
+        try:
+            t0 = time.perf_counter_ns()
+            result = func()
+            t1 = time.perf_counter_ns()
+        finally:
+            if enabled:
+                gc.enable()
+        times.append(t1 - t0)
+    return result, int(np.median(times))
+
+
+def _stats(ms: np.ndarray) -> dict[str, float]:
+    median, mean = float(np.median(ms)), float(np.mean(ms))
+    p5, p95, p99 = (float(v) for v in np.percentile(ms, [5, 95, 99]))
+    return {
+        "median_ms": median,
+        "mean_ms": mean,
+        "p5_ms": p5,
+        "p95_ms": p95,
+        "p99_ms": p99,
+        "max_ms": float(np.max(ms)),
+        "hz_median": 1000.0 / median if median > 0 else np.inf,
+        "hz_mean": 1000.0 / mean if mean > 0 else np.inf,
+        "stability": p99 / median if median > 0 else np.nan,
+    }
+
+
+def summarize(frames: pd.DataFrame, methods: list[str]) -> pd.DataFrame:
+    """The ``summary.csv`` table of a ``frames.csv`` table.
+
+    Parameters
+    ----------
+    frames : per-frame timings (:data:`FRAME_COLUMNS`).
+    methods : the methods, in order (the other values of ``method`` are stages).
+    """
+    rows = []
+    series = {m: frames[frames["method"] == m].set_index("index")["milliseconds"] for m in methods}
+    names = list(methods) + [s for s in STAGES if (frames["method"] == s).any()]
+    for name in names:
+        sub = frames[frames["method"] == name]
+        if sub.empty:
+            continue
+        row: dict[str, Any] = {
+            "method": name,
+            "kind": "method" if name in methods else "stage",
+            "frames": len(sub),
+            **_stats(sub["milliseconds"].to_numpy(dtype=np.float64)),
+            "points_median": float(np.median(sub["points"])),
+            "clusters_median": float(np.median(sub["clusters"].to_numpy(dtype=np.float64)))
+            if name in methods
+            else np.nan,
+        }
+        for other in methods:
+            if name not in methods:
+                row[f"speedup_vs_{other}"] = np.nan
+                continue
+            mine, theirs = series[name], series[other]
+            common = mine.index.intersection(theirs.index)
+            if common.empty:
+                row[f"speedup_vs_{other}"] = np.nan
+                continue
+            row[f"speedup_vs_{other}"] = float(
+                np.median(theirs.loc[common]) / np.median(mine.loc[common])
+            )
+        rows.append(row)
+    return pd.DataFrame(rows, columns=STAT_COLUMNS + [f"speedup_vs_{m}" for m in methods])
+
+
+def histogram(frames: pd.DataFrame, names: list[str]) -> pd.DataFrame:
+    """The ``histogram.csv`` table: counts per :data:`HIST_EDGES_MS` bin, per method or stage."""
+    edges = HIST_EDGES_MS
+    parts = []
+    for name in names:
+        ms = frames.loc[frames["method"] == name, "milliseconds"].to_numpy(dtype=np.float64)
+        if ms.size == 0:
+            continue
+        counts, _ = np.histogram(np.clip(ms, edges[0], edges[-1]), bins=edges)
+        parts.append(
+            pd.DataFrame(
+                {"method": name, "bin_lo_ms": edges[:-1], "bin_hi_ms": edges[1:], "count": counts}
+            )
+        )
+    return pd.concat(parts, ignore_index=True)
+
+
+def _write_csv(df: pd.DataFrame, path: Path) -> None:
+    with atomic_write(path) as tmp:
+        df.to_csv(tmp, index=False)
+
+
+def _write_json(obj: dict[str, Any], path: Path) -> None:
+    with atomic_write(path) as tmp:
+        tmp.write_text(json.dumps(obj, indent=2, default=str) + "\n", encoding="utf-8")
+
+
+def _plots(frames: pd.DataFrame, methods: list[str], out: Path, title: str) -> list[Path]:
+    from flic_cli.plots import plot_hz_boxplot, plot_runtime_histogram, plot_runtime_series
+
+    series, hz, counts = {}, {}, {}
+    for m in methods:
+        sub = frames[frames["method"] == m]
+        ms = sub["milliseconds"].to_numpy(dtype=np.float64)
+        series[m] = (sub["index"].to_numpy(), ms)
+        hz[m] = 1000.0 / np.maximum(ms, 1e-9)
+        counts[m] = np.histogram(np.clip(ms, HIST_EDGES_MS[0], HIST_EDGES_MS[-1]), HIST_EDGES_MS)[0]
+    paths = [out / "runtime.png", out / "boxplot_hz.png", out / "histogram.png"]
+    plot_runtime_series(series, paths[0], title=f"per-frame runtime, {title}")
+    plot_hz_boxplot(hz, paths[1], title=f"frame rate, {title}")
+    plot_runtime_histogram(counts, HIST_EDGES_MS, paths[2], title=f"runtime histogram, {title}")
+    return paths
+
+
+def run_benchmark(
+    data: Path,
+    out: Path,
+    methods: list[str],
+    cfg: dict[str, Any],
+    setting: str = "ground",
+    sequences: list[str] | None = None,
+    frames: tuple[int | None, int | None] | None = None,
+    ground_remover: str = "own",
+    warmup: int = 3,
+    repeat: int = 1,
+    dbscan_every: int = 10,
+    threads: int = 1,
+    plots: bool = True,
+    progress: bool = True,
+) -> BenchmarkResult:
+    """Time every method on every selected frame and write the tables, plots and environment.
+
+    Parameters
+    ----------
+    data : SemanticKITTI root or sequence, or Moosmann log.
+    out : output folder (created).
+    methods : method variant names of the config.
+    cfg : loaded config.
+    setting : ``"ground"`` (ground extraction timed as part of every method) or ``"no-ground"``.
+    sequences, frames : the selection (see :func:`flic_cli.io.open_dataset`).
+    ground_remover : ``"own"``, ``"paper"`` or ``"bogoslavskyi"`` (see ``make_segmenter``).
+    warmup : untimed runs of every method on the first frame (0: the first timed frame includes
+        compilation).
+    repeat : timed runs per frame and method; the median is kept.
+    dbscan_every : methods of kind ``dbscan`` run only on frames whose position in the selection
+        is a multiple of this.
+    threads : threads of numba and the native thread pools during the run.
+    plots : write the PNG plots.
+    progress : show a progress bar.
+
+    Returns
+    -------
+    BenchmarkResult
+    """
+    if warmup < 0 or repeat < 1 or dbscan_every < 1 or threads < 1:
+        raise FlicInputError(
+            None, "--warmup must be >= 0, --repeat, --dbscan-every and --threads >= 1"
+        )
+    clash = [m for m in methods if m in STAGES]
+    if clash:
+        raise FlicInputError(None, f"method name {clash[0]!r} is reserved for a timed stage")
+    methods = list(dict.fromkeys(methods))
+    ds = open_dataset(data, sequences, frames, require_labels=setting == "no-ground")
+    refs = ds.refs()
+    segs: dict[str, Segmenter] = {
+        m: make_segmenter(cfg, m, setting, ground_remover) for m in methods
+    }
+    every = {m: (dbscan_every if cfg["methods"][m].get("kind") == "dbscan" else 1) for m in methods}
+    projection = cfg.get("projection", {})
+
+    rows: list[tuple] = []
+    first_call: dict[str, float] = {}
+    warm_ms: dict[str, float] = {}
+    warm_frame: dict[str, Any] | None = None
+    skipped: list[str] = []
+    with thread_limits(threads) as thread_info:
+        for index, ref in enumerate(
+            tqdm(refs, desc="benchmark", unit="frame", disable=not progress)
+        ):
+            if warm_frame is None and warmup > 0:
+                try:
+                    t0 = time.perf_counter_ns()
+                    frame = ds.load(ref)
+                    t1 = time.perf_counter_ns()
+                except FlicInputError as exc:
+                    skipped.append(str(exc))
+                    warnings.warn(f"skipping frame: {exc}", stacklevel=2)
+                    continue
+                prep = prepare(frame, setting, projection)
+                t2 = time.perf_counter_ns()
+                first_call = {"read": (t1 - t0) / 1e6, "project": (t2 - t1) / 1e6}
+                for m, seg in segs.items():
+                    for k in range(warmup):
+                        _, ns = _timed(lambda seg=seg, prep=prep: seg(prep.image, prep.points), 1)
+                        if k == 0:
+                            first_call[m] = ns / 1e6
+                        warm_ms[m] = ns / 1e6
+                warm_frame = {"sequence": ref.sequence, "frame": ref.frame}
+                del frame, prep
+            try:
+                frame, ns_read = _timed(lambda ref=ref: ds.load(ref), 1)
+            except FlicInputError as exc:
+                skipped.append(str(exc))
+                warnings.warn(f"skipping frame: {exc}", stacklevel=2)
+                continue
+            prep, ns_proj = _timed(lambda frame=frame: prepare(frame, setting, projection), repeat)
+            n_scan, n_points = prep.n_scan, int(prep.points.shape[0])
+            rows.append(("read", index, ref.sequence, ref.frame, ns_read / 1e6, n_scan, -1))
+            rows.append(("project", index, ref.sequence, ref.frame, ns_proj / 1e6, n_points, -1))
+            for m, seg in segs.items():
+                if index % every[m]:
+                    continue
+                (labels, _), ns = _timed(
+                    lambda seg=seg, prep=prep: seg(prep.image, prep.points), repeat
+                )
+                clusters = int(labels.max(initial=0))
+                rows.append((m, index, ref.sequence, ref.frame, ns / 1e6, n_points, clusters))
+            del frame, prep
+
+    if not rows:
+        raise FlicInputError(data, "no frame could be read")
+    table = pd.DataFrame(rows, columns=FRAME_COLUMNS)
+    table["clusters"] = table["clusters"].astype("Int64").mask(table["clusters"] < 0)
+    order = {name: k for k, name in enumerate([*methods, *STAGES])}
+    table = table.sort_values(
+        ["method", "index"], key=lambda c: c.map(order) if c.name == "method" else c, kind="stable"
+    ).reset_index(drop=True)
+    summary = summarize(table, methods)
+    hist = histogram(table, [*methods, *STAGES])
+    timed_frames = int(table.loc[table["method"] == "read", "index"].nunique())
+
+    notes = []
+    for m in methods:
+        if every[m] > 1:
+            n = int((table["method"] == m).sum())
+            notes.append(
+                f"{m}: timed only on frames with index % {every[m]} == 0 ({n} of {timed_frames} "
+                f"frames, --dbscan-every {every[m]}); its speed-ups are computed on those frames"
+            )
+    if thread_info["numba"] != threads:
+        notes.append(
+            f"numba runs {thread_info['numba']} thread(s), not {threads}: NUMBA_NUM_THREADS was "
+            f"{thread_info['numba_max']} when numba was imported"
+        )
+    if skipped:
+        notes.append(f"skipped {len(skipped)} unreadable frame(s) (see environment.json)")
+    if warmup == 0:
+        notes.append("no warm-up (--warmup 0): the first frame's times include compilation")
+
+    env = collect_environment(
+        thread_info,
+        timer="time.perf_counter_ns",
+        gc_disabled_while_timing=True,
+        data=str(data),
+        format=getattr(ds, "format", None),
+        setting=setting,
+        ground_remover=ground_remover,
+        methods={
+            m: {"kind": cfg["methods"][m].get("kind"), "ground": segs[m].ground} for m in methods
+        },
+        frames_selected=len(refs),
+        frames_timed=timed_frames,
+        repeat=repeat,
+        dbscan_every=dbscan_every,
+        subsampled={m: every[m] for m in methods if every[m] > 1},
+        skipped_frames=skipped,
+        warmup={
+            "runs": warmup,
+            "frame": warm_frame,
+            "first_call_ms": first_call,
+            "last_warmup_ms": warm_ms,
+            "note": "first call incl. JIT compilation / on-disk cache load; not in the statistics",
+        },
+    )
+
+    out = Path(out)
+    files = [out / n for n in ("frames.csv", "summary.csv", "histogram.csv", "environment.json")]
+    _write_csv(table, files[0])
+    _write_csv(summary, files[1])
+    _write_csv(hist, files[2])
+    _write_json(env, files[3])
+    if plots:
+        name = Path(data).name or str(data)
+        files += _plots(table, methods, out, f"{name}, {timed_frames} frames, {setting} setting")
+    return BenchmarkResult(table, summary, hist, env, out, files, notes)
