@@ -184,7 +184,7 @@ def plot_sweep(
     ax.set_xlabel(xlabel)
     ax.set_ylabel("score [%]")
     ax.grid(alpha=0.3)
-    ax.legend(loc="lower right")
+    ax.legend(loc="best")
     if title:
         ax.set_title(title, fontsize=10)
     save_figure(fig, path)

@@ -1,0 +1,150 @@
+"""Map a function over frames: in this process, in a pool of local processes, or on a dask cluster.
+
+:func:`imap_frames` yields the results as they complete, in any order; callers that need a
+deterministic output sort what they collect. Work is handed out lazily (a bounded number of items
+in flight), so the memory of the parent stays bounded whatever the number of items.
+
+Workers run single-threaded (BLAS, OpenMP and numba thread pools limited to one thread): the
+parallelism is over frames, and nested thread pools would only oversubscribe the cores.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Callable, Iterable, Iterator
+from typing import Any, TypeVar
+
+from flic_cli.errors import FlicInputError
+
+T = TypeVar("T")
+R = TypeVar("R")
+
+#: Thread-pool variables set to 1 in worker processes (read by BLAS/OpenMP at import). numba's
+#: kernels here are serial (no ``parallel=True``), so its pool is left alone.
+THREAD_ENV = (
+    "OMP_NUM_THREADS",
+    "OPENBLAS_NUM_THREADS",
+    "MKL_NUM_THREADS",
+    "BLIS_NUM_THREADS",
+    "VECLIB_MAXIMUM_THREADS",
+    "NUMEXPR_NUM_THREADS",
+)
+
+
+class SingleThreaded:
+    """Picklable wrapper that runs ``func`` with every thread pool limited to one thread.
+
+    Parameters
+    ----------
+    func : a top-level (picklable) function of one argument.
+    """
+
+    def __init__(self, func: Callable[[Any], Any]) -> None:
+        self.func = func
+
+    def __call__(self, item: Any) -> Any:
+        for name in THREAD_ENV:
+            os.environ.setdefault(name, "1")
+        try:
+            from threadpoolctl import threadpool_limits
+        except ImportError:  # pragma: no cover - threadpoolctl comes with scikit-learn
+            return self.func(item)
+        with threadpool_limits(limits=1):
+            return self.func(item)
+
+
+def resolve_jobs(jobs: int) -> int:
+    """``--jobs``: a positive count, or 0 / negative for one process per CPU core.
+
+    Parameters
+    ----------
+    jobs : requested number of processes.
+
+    Returns
+    -------
+    int
+        The number of processes, at least 1.
+    """
+    if jobs > 0:
+        return jobs
+    return max(1, len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else 1)
+
+
+def imap_frames(
+    func: Callable[[T], R],
+    items: Iterable[T],
+    jobs: int = 1,
+    scheduler: str | None = None,
+) -> Iterator[R]:
+    """Apply ``func`` to every item and yield the results as they complete.
+
+    Parameters
+    ----------
+    func : a top-level (picklable) function of one argument; for ``jobs > 1`` or a scheduler it
+        runs in other processes, so it and its argument and result must pickle.
+    items : the arguments (e.g. frame references with the run's parameters).
+    jobs : processes on this machine: 1 runs everything here, in order; more uses a joblib
+        (loky) process pool; 0 or negative: one per CPU core.
+    scheduler : address of a dask.distributed scheduler (``tcp://host:8786``); when given, the
+        items run on that cluster and ``jobs`` is ignored. Needs ``pip install flic[distributed]``.
+
+    Yields
+    ------
+    The results, in completion order (the item order when ``jobs == 1``).
+
+    Raises
+    ------
+    FlicInputError
+        When dask.distributed is not installed or the scheduler cannot be reached.
+    """
+    if scheduler is not None:
+        yield from _imap_dask(func, items, scheduler)
+        return
+    jobs = resolve_jobs(jobs)
+    if jobs == 1:
+        for item in items:
+            yield func(item)
+        return
+    from joblib import Parallel, delayed, parallel_config
+
+    wrapped = SingleThreaded(func)
+    with parallel_config(backend="loky", inner_max_num_threads=1):
+        results = Parallel(
+            n_jobs=jobs, return_as="generator_unordered", pre_dispatch="2*n_jobs", batch_size=1
+        )(delayed(wrapped)(item) for item in items)
+    yield from results
+
+
+def _imap_dask(func: Callable[[T], R], items: Iterable[T], scheduler: str) -> Iterator[R]:
+    """:func:`imap_frames` on a dask.distributed cluster, a bounded window of tasks in flight."""
+    try:
+        from distributed import Client, as_completed
+    except ImportError:
+        raise FlicInputError(
+            None,
+            "--scheduler needs dask.distributed, which is not installed "
+            "(pip install 'flic[distributed]')",
+        ) from None
+    try:
+        client = Client(scheduler, timeout="20s", set_as_default=False)
+    except (OSError, TimeoutError, ValueError) as exc:
+        raise FlicInputError(None, f"cannot reach the dask scheduler {scheduler} ({exc})") from None
+    try:
+        threads = sum(client.nthreads().values()) or 1
+        window = max(4, 2 * threads)
+        wrapped = SingleThreaded(func)
+        it = iter(items)
+        pending = as_completed(loop=client.loop)
+        for item in it:
+            pending.add(client.submit(wrapped, item, pure=False))
+            if pending.count() >= window:
+                break
+        for future in pending:
+            result = future.result()
+            future.release()
+            yield result
+            for item in it:
+                pending.add(client.submit(wrapped, item, pure=False))
+                break
+    finally:
+        client.close()
