@@ -69,7 +69,10 @@ def paper_tables(
 
 
 def paper_ground(
-    image: RangeImage, max_slope_deg: float = 10.0, sensor_height_m: float = 1.73
+    image: RangeImage,
+    max_slope_deg: float = 10.0,
+    sensor_height_m: float = 1.73,
+    height_slope_deg: float | None = None,
 ) -> np.ndarray:
     """Ground pixels by the paper's surface-angle test, keeping elevated horizontal surfaces.
 
@@ -83,8 +86,11 @@ def paper_ground(
     Parameters
     ----------
     image : the range image.
-    max_slope_deg : accepted deviation from horizontal and slope of the height line, degrees.
+    max_slope_deg : accepted deviation from horizontal, degrees.
     sensor_height_m : height of the sensor above the road, metres.
+    height_slope_deg : slope of the height line, degrees (default: ``max_slope_deg``, as in the
+        paper). Horizontal surfaces below the line are ground: at 10 deg the line passes the
+        sensor's height about 10 m out, so car roofs farther away than that count as ground.
 
     Returns
     -------
@@ -101,5 +107,5 @@ def paper_ground(
         np.sin(el),
         np.cos(el),
         float(sensor_height_m),
-        float(np.tan(np.radians(max_slope_deg))),
+        float(np.tan(np.radians(max_slope_deg if height_slope_deg is None else height_slope_deg))),
     )
