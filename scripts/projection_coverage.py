@@ -1,7 +1,8 @@
 """Projection coverage of the ring recovery vs the spherical projection on SemanticKITTI frames.
 
 Coverage = share of a scan's points that own a pixel of the 64 x WIDTH range image (the others
-share a pixel with a nearer point). Writes ``results/projection_coverage.csv`` and prints the means.
+share a pixel with a nearer point). Also counts the rows a naive rule finds (a new row at every
++-180 deg azimuth jump). Writes ``results/projection_coverage.csv`` and prints the means.
 
 Usage: python scripts/projection_coverage.py [DATA] [--width 2048] [--out CSV]
 """
@@ -9,9 +10,9 @@ Usage: python scripts/projection_coverage.py [DATA] [--width 2048] [--out CSV]
 from __future__ import annotations
 
 import argparse
-import platform
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 from tqdm import tqdm
 
@@ -38,6 +39,7 @@ def main() -> None:
                 frame=ref.frame,
                 points=len(pts),
                 rows_recovered=rings.shape[0] if rings.projection == "rings" else 0,
+                rows_naive=int((np.diff(np.arctan2(pts[:, 1], pts[:, 0])) < -np.pi).sum()) + 1,
                 coverage_rings=round(rings.coverage, 5),
                 coverage_spherical=round(sph.coverage, 5),
             )
@@ -46,11 +48,13 @@ def main() -> None:
     with atomic_write(args.out) as tmp:
         df.to_csv(tmp, index=False)
     print(
-        f"{len(df)} frames, width {args.width}, {platform.processor() or platform.machine()}: "
+        f"{len(df)} frames, width {args.width}: "
         f"mean coverage rings {100 * df.coverage_rings.mean():.2f}% "
         f"(min {100 * df.coverage_rings.min():.2f}%), "
         f"spherical {100 * df.coverage_spherical.mean():.2f}% "
-        f"(min {100 * df.coverage_spherical.min():.2f}%) -> {args.out}"
+        f"(min {100 * df.coverage_spherical.min():.2f}%); rows: recovered "
+        f"{df.rows_recovered.min()}-{df.rows_recovered.max()}, naive rule "
+        f"{df.rows_naive.min()}-{df.rows_naive.max()} -> {args.out}"
     )
 
 
