@@ -627,3 +627,20 @@ def test_real_kitti_calib_and_poses(kitti_root: Path) -> None:
     poses = read_poses(seq / "poses.txt")
     assert poses.shape == (4541, 3, 4)
     np.testing.assert_allclose(poses[0, :, :3], np.eye(3), atol=1e-6)
+
+
+def test_whole_dataset_evaluation_leaves_out_unlabelled_sequences(tmp_path):
+    from flic_cli.io import open_dataset as open_ds
+
+    for seq, labelled in (("00", True), ("11", False)):
+        root = tmp_path / "sequences" / seq
+        (root / "velodyne").mkdir(parents=True)
+        np.zeros((3, 4), np.float32).tofile(root / "velodyne" / "000000.bin")
+        if labelled:
+            (root / "labels").mkdir()
+            np.zeros(3, np.uint32).tofile(root / "labels" / "000000.label")
+    with pytest.warns(UserWarning, match="sequences 11 have no labels/ folder"):
+        ds = open_ds(tmp_path, require_labels=True)
+    assert [r.sequence for r in ds.refs()] == ["00"]
+    with pytest.raises(FlicInputError, match="missing label files"):
+        open_ds(tmp_path, sequences=["00", "11"], require_labels=True)

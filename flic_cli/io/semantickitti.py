@@ -351,7 +351,9 @@ class SemanticKittiDataset:
     sequences : the sequences to use (``["00", "08"]``); None = all.
     frames : ``(start, stop)`` frame numbers, start inclusive, stop exclusive, either None for
         open; None = all frames.
-    require_labels : fail when a selected frame has no ``labels/<XXXXXX>.label``.
+    require_labels : fail when a selected frame has no ``labels/<XXXXXX>.label``. Without an
+        explicit ``sequences`` selection, sequences that have no ``labels/`` folder at all (the
+        unlabelled test split 11-21) are left out with a warning instead.
 
     Raises
     ------
@@ -385,6 +387,16 @@ class SemanticKittiDataset:
                     f"no sequence {', '.join(unknown)} (found: {', '.join(found) or 'none'})",
                 )
             found = {s: found[s] for s in sorted(set(sequences))}
+        elif require_labels:
+            # A whole dataset: leave out the sequences without labels (SemanticKITTI's test split).
+            unlabelled = [s for s, d in found.items() if not (d / "labels").is_dir()]
+            if unlabelled and len(unlabelled) < len(found):
+                warnings.warn(
+                    f"{self.root}: sequences {', '.join(unlabelled)} have no labels/ folder "
+                    "(unlabelled split) and are left out",
+                    stacklevel=2,
+                )
+                found = {s: d for s, d in found.items() if s not in unlabelled}
         self._refs: list[FrameRef] = []
         for name, seq_dir in found.items():
             for bin_path in sorted((seq_dir / "velodyne").glob("*.bin")):
