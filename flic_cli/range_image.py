@@ -20,6 +20,7 @@ import warnings
 from dataclasses import dataclass
 
 import numpy as np
+from numba import njit
 
 
 @dataclass(frozen=True)
@@ -114,7 +115,10 @@ class RangeImage:
 
 
 def recover_rings(
-    points: np.ndarray, expected_rows: int = 64, min_ring_points: int = 200
+    points: np.ndarray,
+    expected_rows: int = 64,
+    min_ring_points: int = 200,
+    azimuth: np.ndarray | None = None,
 ) -> np.ndarray | None:
     """Ring (row) index of every point, recovered from the sensor's scan order.
 
@@ -130,6 +134,7 @@ def recover_rings(
     points : (N, 3+) array in scan order.
     expected_rows : number of rings the sensor has (64 for the HDL-64E).
     min_ring_points : a ring shorter than this is taken as a sign that the scan order is broken.
+    azimuth : (N,) ``atan2(y, x)`` of the points, if already computed.
 
     Returns
     -------
@@ -139,8 +144,9 @@ def recover_rings(
     """
     if points.shape[0] == 0:
         return None
-    az = np.arctan2(points[:, 1].astype(np.float64), points[:, 0].astype(np.float64))
-    spiral = np.unwrap(az)
+    if azimuth is None:
+        azimuth = np.arctan2(points[:, 1].astype(np.float64), points[:, 0].astype(np.float64))
+    spiral = np.unwrap(azimuth)
     spiral -= 2.0 * np.pi * np.floor(spiral[: min(50, spiral.size)].min() / (2.0 * np.pi))
     ring = np.maximum.accumulate(np.floor(spiral / (2.0 * np.pi)).astype(np.int64))
     ring -= ring[0]
@@ -151,10 +157,12 @@ def recover_rings(
 
 
 def _row_elevation(elev_pts: np.ndarray, rows: np.ndarray, n_rows: int) -> np.ndarray:
-    """Median elevation of the points of every row; rows without points are interpolated."""
-    order = np.argsort(rows, kind="stable")
-    bounds = np.searchsorted(rows[order], np.arange(n_rows + 1))
-    sorted_el = elev_pts[order]
+    """Median elevation of the points of every row; rows without points are interpolated.
+
+    ``rows`` must be non-decreasing (ring indices in scan order).
+    """
+    bounds = np.searchsorted(rows, np.arange(n_rows + 1))
+    sorted_el = elev_pts
     out = np.full(n_rows, np.nan)
     for r in range(n_rows):
         if bounds[r + 1] > bounds[r]:
@@ -166,15 +174,22 @@ def _row_elevation(elev_pts: np.ndarray, rows: np.ndarray, n_rows: int) -> np.nd
     return np.interp(idx, idx[ok], out[ok])
 
 
+@njit(cache=True)
+def _nearest_per_pixel(rng: np.ndarray, pix: np.ndarray, n_pixels: int) -> np.ndarray:
+    ranges = np.zeros(n_pixels, dtype=np.float32)
+    for i in range(pix.size):
+        p = pix[i]
+        if ranges[p] == 0.0 or rng[i] < ranges[p]:
+            ranges[p] = rng[i]
+    return ranges
+
+
 def _fill_pixels(
     rng: np.ndarray, rows: np.ndarray, cols: np.ndarray, n_rows: int, width: int
 ) -> tuple[np.ndarray, np.ndarray]:
     """Range image where the nearest point of each pixel wins; flat pixel index per point."""
     pix = rows * width + cols
-    ranges = np.zeros(n_rows * width, dtype=np.float32)
-    # Write far points first so that the nearest point of a pixel is written last and wins.
-    order = np.argsort(-rng, kind="stable")
-    ranges[pix[order]] = rng[order]
+    ranges = _nearest_per_pixel(rng.astype(np.float32), pix, n_rows * width)
     return ranges.reshape(n_rows, width), pix
 
 
@@ -208,12 +223,12 @@ def project_points(
     if mode not in ("rings", "spherical"):
         raise ValueError(f"unknown projection mode {mode!r} (rings | spherical)")
     xyz = np.asarray(points[:, :3], dtype=np.float64)
-    rng = np.sqrt((xyz**2).sum(axis=1))
+    rng = np.sqrt(np.einsum("ij,ij->i", xyz, xyz))
     az = np.arctan2(xyz[:, 1], xyz[:, 0])
     cols = np.floor((np.pi - az) / (2.0 * np.pi) * width).astype(np.int64) % width
     with np.errstate(invalid="ignore", divide="ignore"):
         elev = np.arcsin(np.clip(xyz[:, 2] / np.maximum(rng, 1e-9), -1.0, 1.0))
-    ring = recover_rings(xyz, rows) if mode == "rings" else None
+    ring = recover_rings(xyz, rows, azimuth=az) if mode == "rings" else None
     if mode == "rings" and ring is None:
         warnings.warn(
             f"ring recovery did not find {rows} rings in scan order; "

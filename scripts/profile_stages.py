@@ -1,0 +1,76 @@
+"""Where the time of one frame goes: read, project, ground, cluster, per-point labels, score.
+
+Times every stage of the per-frame path of ``flic evaluate`` for one method (single thread, after a
+warm-up frame) over every selected frame and prints the medians. Run it under a sampling profiler
+to see inside a stage: ``py-spy record -f raw -o prof.txt -- python scripts/profile_stages.py``.
+
+Usage: python scripts/profile_stages.py [DATA] [--method flic0] [--setting ground] [--repeat 5]
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+from pathlib import Path
+
+from flic_cli.runs.environment import cpu_model, pin_thread_env, thread_limits
+
+pin_thread_env(1)  # before numpy/numba are imported
+
+import numpy as np  # noqa: E402
+
+from flic_cli.config import load_config  # noqa: E402
+from flic_cli.io import open_dataset  # noqa: E402
+from flic_cli.metrics import match_objects, segmentation_stats  # noqa: E402
+from flic_cli.runs.pipeline import make_segmenter, prepare  # noqa: E402
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("data", nargs="?", default="../shared/data/semantickitti", type=Path)
+    parser.add_argument("--method", default="flic0")
+    parser.add_argument("--setting", default="ground")
+    parser.add_argument("--ground-remover", default="paper")
+    parser.add_argument("--repeat", type=int, default=5, help="passes over the frames")
+    args = parser.parse_args()
+    with thread_limits(1):
+        run(args)
+
+
+def run(args: argparse.Namespace) -> None:
+    cfg = load_config()
+    ds = open_dataset(args.data)
+    seg = make_segmenter(cfg, args.method, args.setting, args.ground_remover)
+    stages: dict[str, list[float]] = {}
+
+    def timed(name, func, *a):
+        t = time.perf_counter()
+        out = func(*a)
+        stages.setdefault(name, []).append(1e3 * (time.perf_counter() - t))
+        return out
+
+    refs = ds.refs()
+    for i in range(args.repeat * len(refs) + 1):
+        ref = refs[max(i - 1, 0) % len(refs)]
+        frame = timed("read", ds.load, ref)
+        prep = timed("project", prepare, frame, args.setting, cfg["projection"])
+        ground = timed("ground", seg.extract_ground, prep.image)
+        labels = timed("cluster+labels", seg.method.segment, prep.image, prep.points, ground)
+        if prep.labels is not None:
+            timed("score", match_objects, prep.labels, labels, prep.points)
+            timed("seg_stats", segmentation_stats, prep.labels, labels)
+        if i == 0:  # warm-up frame (JIT cache load)
+            stages.clear()
+    total = sum(np.median(v) for v in stages.values())
+    print(
+        f"{args.method}, {args.setting} setting, {len(refs)} frames x {args.repeat}, "
+        f"one thread of {cpu_model()}:"
+    )
+    for name, v in stages.items():
+        med = np.median(v)
+        print(f"  {name:15s} median {med:7.3f} ms  ({100 * med / total:4.1f} %)")
+    print(f"  {'total':15s} median {total:7.3f} ms  -> {1e3 / total:.1f} frames/s on one core")
+
+
+if __name__ == "__main__":
+    main()
