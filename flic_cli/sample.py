@@ -6,26 +6,59 @@ per-user cache folder and runs on it, so the main command of the README works ou
 
 The scene
 ---------
-One straight street per seed, in a world frame equal to the sensor frame of frame 0 (x forward along
-the street, y left, z up, metres). The ego car drives in the right lane at 10 m/s (1 m per frame at
-10 Hz) and its sensor sits :data:`SENSOR_HEIGHT_M` above the road. The road rises ahead with a
-gentle slope (1-2 deg: ``z = -1.73 + slope * x`` in the sensor frame), a 0.12 m kerb steps up to a
-sidewalk on both sides, terrain lies beyond. Along the street: building blocks with glazed windows
-(glass gives no return), fences with gaps, bushes, trees (trunk + crown), poles, 8-14 parked cars
-(some bumper to bumper, some touching a pole or a bush), 1-3 moving cars, 3-6 pedestrians (some in
-groups), one or two bicycles and sometimes a truck. A building closes each end of the street.
+One straight one-way street per seed, in a world frame equal to the sensor frame of frame 0 (x
+forward along the street, y left, z up, metres). The ego car drives down its single 3.8-4.2 m lane
+at 10 m/s (1 m per frame at 10 Hz) and its sensor sits :data:`SENSOR_HEIGHT_M` above the road. The
+road rises ahead with a gentle slope (1-2 deg: ``z = -1.73 + slope * x`` in the sensor frame); a
+0.12 m kerb steps up to the sidewalks. Along the street:
 
-Every primitive is an axis-aligned or yaw-rotated box or a vertical cylinder with a
-SemanticKITTI raw class id and, for things, an instance id (0 for stuff). A car is a body box, a
-"window" cabin box that returns nothing for most rays, and a thin roof slab on top, so its roof is
-separated from its body by a gap of a few rows, as in real scans.
+- both parking strips are lined with parked cars, some bumper to bumper, most 1-2.5 m apart, now
+  and then a 3.5-7 m driveway, and sometimes a van or truck on the left;
+- on the right, a 3.4-4 m sidewalk with a cycle track along the kerb and shops: street trees
+  (trunk + crown) every 4-7 m and, 1-3 m apart, lamps, sign posts, bollards, bins, planters,
+  bicycles, scooters, utility cabinets and advertising columns along the kerb, benches, cafe tables
+  and planters along the shop windows, and most of the 40-70 pedestrians (some in groups);
+- on the left, a 2.2-2.8 m sidewalk with trees and sparser furniture, and front gardens (terrain)
+  with hedges, fences and low walls in segments with gaps, shrubs and small trees;
+- buildings in blocks of 1-4 segments whose frontage steps back and forth by 1-2 m, with 1.6-4.5 m
+  alleys between blocks (through some, a building set further back); a building closes each end
+  of the street;
+- traffic: a car 6-9 m ahead keeping its distance to the ego car (often a second one ahead of it
+  and one following the ego car) and 2-5 cyclists on the cycle track.
+
+Every primitive is an axis-aligned or yaw-rotated box or a vertical cylinder with a SemanticKITTI
+raw class id and, for things, an instance id (0 for stuff). A car is a body box, a thin roof slab
+and six window pillars: rays pass through its windows and see what lies beyond, so its roof is
+separated from its body by a gap of a few rows except at the pillars. Facades have glazed windows
+(shops: glazed from the pavement up between narrow pillars); a ray through a window returns from
+the room behind it, at a depth fixed per window, or not at all.
 
 The sensor
 ----------
 :data:`HDL64_PITCH_DEG` models the Velodyne HDL-64E's two laser blocks; :func:`cast` intersects a
 grid of rays (beam pitches x column azimuths) with the scene (first hit, vectorised over rays) and
-adds range noise, random dropouts, dark-paint dropouts on some cars, glass, and grazing-angle
-dropouts on far ground. Occlusions and moving objects come out of the geometry.
+adds range noise, random dropouts, dark-paint dropouts on some cars (growing with range), window
+glass, and grazing-angle dropouts on the ground beyond 15 m (dark asphalt: 5 % of the returns left
+at 27 m). Occlusions and moving objects come out of the geometry.
+
+The Moosmann recording car hides its sensor's lower beams: :data:`EGO_VEHICLE` (a 4.5 x 1.8 m box
+whose top lies 0.5 m below the sensor, from 2 m ahead of it to 2.5 m behind) swallows the beams
+steeper than 14 deg looking ahead and 11 deg looking back, about 9,300 of the 55,680 pixels of a
+frame; rays that hit it give no return (range 0). Sideways even the lowest beam clears it. The
+SemanticKITTI sequence is cast without it, like the real KITTI scans, which lose only a few
+returns of their lowest beams behind the car: about 20 % of its points are ground.
+
+Realism of the Moosmann log
+---------------------------
+Real Moosmann frames hold 40k-48k valid pixels of 870 x 64, 37k-43k of them left after ground
+removal, and FLIC finds about 90-130 clusters in them. The default sample (seed 0, 20 frames) has
+43.5k-44.1k valid pixels, 36.7k-39.8k (mean 38.3k) left after the paper's ground removal
+(:func:`flic_cli.ground.paper_ground`), and FLIC with 0 Map Connections and the paper's ground
+removal finds 41-58 clusters of at least 100 pixels (mean 47); seeds 1-3 give 34.8k-40.3k
+non-ground pixels and 38-62 clusters. The cluster count falls short of the real logs': in an
+870 x 64 image an object beyond about 15 m covers fewer than 100 pixels, and nearer objects hide one
+another along the street, so adding objects (more furniture, trees, pedestrians, open space between
+the parked cars) does not raise it beyond about 50-60. The KITTI scans hold about 124k points each.
 
 Outputs
 -------
@@ -42,12 +75,13 @@ import io
 import os
 import shutil
 import tempfile
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
 
 __all__ = [
+    "EGO_VEHICLE",
     "HDL64_PITCH_DEG",
     "MAX_RANGE_M",
     "MOOSMANN_HEIGHT",
@@ -86,6 +120,10 @@ MAX_RANGE_M: float = 120.0
 MOOSMANN_WIDTH: int = 870
 MOOSMANN_HEIGHT: int = 64
 
+#: Ground returns fade with range (grazing incidence on dark asphalt): full up to ``[0]`` metres,
+#: then falling linearly to 5 % over ``[1]`` more metres.
+_GRAZE_M = (15.0, 12.0)
+
 #: Frame rate of the sensor (Hz) and speed of the ego car (m/s).
 _FPS = 10.0
 _EGO_SPEED = 10.0
@@ -104,7 +142,12 @@ _REMISSION = {
     252: 0.40,
     30: 0.35,
     11: 0.30,
+    15: 0.35,
+    31: 0.30,
     18: 0.50,
+    52: 0.35,
+    81: 0.70,
+    99: 0.45,
 }
 
 #: Classes that carry instance ids (SemanticKITTI "things").
@@ -127,9 +170,13 @@ class Box:
     yaw : rotation about z in radians (counter-clockwise, 0 = axis-aligned).
     semantic : SemanticKITTI raw class id.
     instance : instance id (0 for stuff).
-    p_return : probability that a ray hitting the box gives a return (glass, dark paint, foliage).
+    p_return : probability that a ray hitting the box gives a return (dark paint, foliage, fences).
     remission : reflectivity written to the KITTI ``.bin`` (0..1).
-    facade : True for a building facade with glazed windows (window glass gives no return).
+    facade : True for a building facade with glazed windows on its vertical faces: a ray through
+        a window returns from the room behind it (at a depth fixed per window) with probability
+        0.85, else not at all.
+    shopfront : True for a facade whose ground floor is a row of shop windows, glazed from the
+        pavement up between narrow pillars.
     """
 
     center: tuple[float, float, float]
@@ -140,6 +187,7 @@ class Box:
     p_return: float = 1.0
     remission: float = 0.3
     facade: bool = False
+    shopfront: bool = False
 
 
 @dataclass(frozen=True)
@@ -187,6 +235,14 @@ class Ground:
     sensor_height: float = SENSOR_HEIGHT_M
 
 
+#: The Moosmann recording car in its sensor frame, as the sensor sees it: a 4.5 x 1.8 m box from
+#: 2.0 m ahead of the sensor to 2.5 m behind it, its top (roof, hood and trunk lumped) 0.5 m below
+#: the sensor and its bottom 0.18 m above the road. Rays that hit it give no return (see
+#: :func:`cast`): it hides the beams steeper than 14 deg looking ahead and 11 deg looking back
+#: (10.6 deg past the rear corners); sideways even the lowest beam (25 deg) clears it.
+EGO_VEHICLE: tuple[Box, ...] = (Box((-0.25, 0.0, -1.025), (2.25, 0.9, 0.525), 0.0, 0),)
+
+
 @dataclass(frozen=True, eq=False)
 class Scene:
     """One frame of the synthetic street, in that frame's sensor frame.
@@ -219,30 +275,32 @@ class Scene:
 
 
 @dataclass(frozen=True)
-class _MovingCar:
-    """A car driving along a lane (world frame)."""
+class _Mover:
+    """A moving car or cyclist (world frame)."""
 
-    x0: float  # position at frame 0, metres
+    x0: float  # position at frame 0, metres; a follower: phase of its distance changes, radians
     y: float  # lane centre, metres
-    speed: float  # m/s along +x (negative = oncoming)
-    x_stop: float | None  # a car driving ahead stops here (junction); None = wraps around
-    dims: tuple[float, float, float, float]  # length, width, hood height, roof height
+    speed: float  # m/s along +x (negative: towards -x); unused by a follower
+    follow: float | None  # a car in the ego lane keeps this distance ahead of the ego car (< 0:
+    # behind), give or take 0.8 m; None = moves at ``speed`` and loops over the street
+    dims: tuple[float, float, float, float]  # car: length, width, hood height, roof height;
+    # cyclist: bicycle length, rider width, saddle height, head height
     instance: int
     remission: float
-    body_p: float
+    cyclist: bool = False
 
 
 @dataclass(frozen=True)
 class _World:
-    """The static street of one seed (world frame) and its moving cars."""
+    """The static street of one seed (world frame) and its moving cars and cyclists."""
 
     slope: float
     road_y: tuple[float, float]
     sidewalk_y: tuple[float, float]
     boxes: tuple[Box, ...]
     cylinders: tuple[Cylinder, ...]
-    moving: tuple[_MovingCar, ...]
-    wrap: tuple[float, float]  # x range in which oncoming cars loop
+    moving: tuple[_Mover, ...]
+    wrap: tuple[float, float]  # x range over which the cyclists loop
 
 
 # ---------------------------------------------------------------------------------------------
@@ -261,7 +319,11 @@ def _car_boxes(
     body_p: float,
     remission: float,
 ) -> list[Box]:
-    """Body, window cabin and roof slab of a car standing on the ground at height ``zg``."""
+    """Body, roof slab and window pillars of a car standing on the ground at height ``zg``.
+
+    Rays pass through the windows between the pillars and see what lies beyond the car, so the
+    roof is separated from the body by a gap of a few rows except at the pillars.
+    """
     length, width, hood, roof = dims
     c, s = float(np.cos(yaw)), float(np.sin(yaw))
     bottom = zg + 0.22
@@ -276,19 +338,10 @@ def _car_boxes(
         remission,
     )
     cab_len = 0.5 * length
-    off = -0.08 * length  # the cabin sits slightly behind the middle
+    off = -0.08 * length  # the roof sits slightly behind the middle
     cx, cy = x + c * off, y + s * off
     roof_t = 0.06
     cab_half = (cab_len / 2, width / 2 - 0.06)
-    cabin = Box(
-        (cx, cy, (top + zg + roof - roof_t) / 2),
-        (*cab_half, (zg + roof - roof_t - top) / 2),
-        yaw,
-        semantic,
-        instance,
-        0.12,
-        0.1,
-    )
     slab = Box(
         (cx, cy, zg + roof - roof_t / 2),
         (*cab_half, roof_t / 2),
@@ -298,7 +351,21 @@ def _car_boxes(
         1.0,
         remission,
     )
-    return [body, cabin, slab]
+    # Window pillars on both sides: at the windscreen, between the doors and at the rear window.
+    cab_hz = (roof - roof_t - hood) / 2
+    cab_z = zg + (hood + roof - roof_t) / 2
+    parts = [body, slab]
+    for along, half_len in (
+        (cab_half[0] - 0.08, 0.08),
+        (-0.04 * length, 0.06),
+        (0.08 - cab_half[0], 0.08),
+    ):
+        for side in (-1.0, 1.0):
+            across = side * (cab_half[1] - 0.05)
+            px, py = cx + c * along - s * across, cy + s * along + c * across
+            pillar = Box((px, py, cab_z), (half_len, 0.05, cab_hz), yaw, semantic, instance)
+            parts.append(replace(pillar, remission=remission))
+    return parts
 
 
 class _Footprints:
@@ -321,16 +388,22 @@ def _world(seed: int) -> _World:
     u01 = rng.uniform
 
     slope = float(np.tan(np.radians(u01(1.0, 2.0))))
-    half_road = float(u01(5.8, 6.3))  # two 3.5 m lanes share 7 m, the rest is parking
-    sidewalk_w = float(u01(2.6, 3.4))
-    terrain_w = float(u01(1.8, 3.0))
+    # A one-way street: one lane (v = 0 in its middle) between two parking strips.
+    lane_w = float(u01(3.8, 4.2))
+    kerb_v = {side: lane_w / 2 + float(u01(2.0, 2.3)) for side in (-1.0, 1.0)}  # |v| of the kerbs
+    # Sidewalks: shops on the right (a cycle track along the kerb), houses with front gardens
+    # (terrain) on the left.
+    walk_w = {-1.0: float(u01(3.4, 4.0)), 1.0: float(u01(2.2, 2.8))}
+    garden_w = {-1.0: 0.0, 1.0: float(u01(1.2, 2.0))}
     kerb = 0.12
-    yc = 1.75  # street centre in the world frame: the ego drives in the right lane (y = 0)
+    yc = float(u01(-0.15, 0.15))  # the lane's middle in the world frame (the ego drives at y = 0)
     u_min, u_max = -85.0, 105.0  # street ends: a building closes it at both ends
+    u_lo, u_hi = -40.0, 70.0  # the stretch seen by the first 40 frames: small things go here
 
     def ground_z(u: float, v: float) -> float:
         """World z of the ground at street coordinates (u along, v across from the centre)."""
-        return -SENSOR_HEIGHT_M + slope * u + (kerb if abs(v) >= half_road else 0.0)
+        on_walk = v <= -kerb_v[-1.0] or v >= kerb_v[1.0]
+        return -SENSOR_HEIGHT_M + slope * u + (kerb if on_walk else 0.0)
 
     boxes: list[Box] = []
     cyls: list[Cylinder] = []
@@ -342,153 +415,213 @@ def _world(seed: int) -> _World:
         next_instance[0] += 1
         return i
 
-    def add_box(u, v, z0, length, depth, height, yaw, sem, inst=0, p=1.0, facade=False):
+    def add_box(u, v, z0, size, yaw, sem, inst=0, p=1.0, facade=False, shop=False):
+        length, depth, height = size
         rem = float(np.clip(_REMISSION[sem] + rng.normal(0, 0.05), 0.02, 1.0))
-        boxes.append(
-            Box(
-                (u, v + yc, z0 + height / 2),
-                (length / 2, depth / 2, height / 2),
-                yaw,
-                sem,
-                inst,
-                p,
-                rem,
-                facade,
-            )
-        )
+        half = (length / 2, depth / 2, height / 2)
+        centre = (u, v + yc, z0 + height / 2)
+        boxes.append(Box(centre, half, yaw, sem, inst, p, rem, facade, shopfront=shop))
 
     def add_cyl(u, v, r, z0, height, sem, inst=0, p=1.0):
         rem = float(np.clip(_REMISSION[sem] + rng.normal(0, 0.05), 0.02, 1.0))
         cyls.append(Cylinder((u, v + yc), r, z0, z0 + height, sem, inst, p, rem))
 
-    facade_v = half_road + sidewalk_w + terrain_w
+    def add_tree(u, v, trunk_r, trunk_h, crown_r, crown_h):
+        zg = ground_z(u, v)
+        add_cyl(u, v, trunk_r, zg, trunk_h, 71)
+        add_cyl(u, v, crown_r, zg + trunk_h - 0.2, crown_h, 70, p=0.75)
+        taken.add(u, v, trunk_r + 0.2)
 
-    # Buildings: blocks along both sides with gaps; a set-back building fills each gap.
+    # Buildings: blocks along both sides, broken by alleys and passages (through some of which a
+    # building further back is seen); a block's frontage steps back and forth by up to 2 m.
     for side in (-1.0, 1.0):
+        facade_v = kerb_v[side] + walk_w[side] + garden_w[side]
         u = u_min + float(u01(0, 5))
         while u < u_max:
-            length = float(u01(10.0, 32.0))
-            height = float(u01(6.0, 20.0))
-            depth = 12.0
-            v = side * (facade_v + float(u01(0.0, 1.0)) + depth / 2)
-            add_box(
-                u + length / 2,
-                v,
-                ground_z(u, v) - 0.3,
-                length,
-                depth,
-                height + 0.3,
-                0.0,
-                50,
-                facade=True,
-            )
-            u += length
-            if rng.random() < 0.35:
-                gap = float(u01(4.0, 12.0))
-                back = side * (facade_v + float(u01(8.0, 16.0)) + depth / 2)
-                add_box(
-                    u + gap / 2,
-                    back,
-                    ground_z(u, back) - 0.3,
-                    gap + 6.0,
-                    depth,
-                    float(u01(5.0, 15.0)),
-                    0.0,
-                    50,
-                    facade=True,
-                )
-                u += gap
+            height = float(u01(7.0, 18.0))
+            depth = 10.0
+            recessed = bool(rng.random() < 0.5)
+            for _seg in range(int(rng.integers(1, 5))):
+                length = float(u01(2.5, 7.0))
+                recessed = not recessed  # bays, porches, recessed entrances: the frontage steps
+                setback = float(u01(1.0, 2.0)) if recessed else 0.0
+                v = side * (facade_v + setback + depth / 2)
+                size = (length, depth, height + float(u01(-1.0, 1.0)) + 0.3)
+                shop = side < 0 and rng.random() < 0.7
+                zb = ground_z(u, v) - 0.3
+                add_box(u + length / 2, v, zb, size, 0.0, 50, facade=True, shop=shop)
+                u += length
+            gap = float(u01(1.6, 4.5))
+            if rng.random() < 0.4:
+                vb = side * (facade_v + float(u01(8.0, 16.0)) + depth / 2)
+                size = (gap + 6.0, depth, float(u01(5.0, 15.0)))
+                add_box(u + gap / 2, vb, ground_z(u, vb) - 0.3, size, 0.0, 50, facade=True)
+            u += gap
     # The ends of the street.
     for u0, length in ((u_max, 15.0), (u_min - 15.0, 15.0)):
-        add_box(
-            u0 + length / 2,
-            0.0,
-            ground_z(u0, 99.0) - 0.5,
-            length,
-            90.0,
-            float(u01(14.0, 24.0)),
-            0.0,
-            50,
-            facade=True,
-        )
+        size = (length, 90.0, float(u01(14.0, 24.0)))
+        add_box(u0 + length / 2, 0.0, ground_z(u0, 99.0) - 0.5, size, 0.0, 50, facade=True)
 
-    # Fences between sidewalk and terrain, with gaps.
-    for side in (-1.0, 1.0):
-        u = u_min + float(u01(0, 10))
+    # Front gardens: hedges, fences and low walls in segments along the back of the sidewalks;
+    # shrubs and garden trees behind them.
+    for side in (1.0,):
+        v_walk = kerb_v[side] + walk_w[side]
+        u = u_min + float(u01(0, 4))
         while u < u_max:
-            length = float(u01(4.0, 16.0))
-            if rng.random() < 0.6:
-                v = side * (half_road + sidewalk_w + 0.15)
+            length = float(u01(1.5, 5.0))
+            kind = int(rng.choice(4, p=[0.5, 0.2, 0.15, 0.15]))
+            if kind == 0:  # hedge
+                depth = float(u01(0.6, 1.0))
+                v = side * (v_walk + 0.05 + depth / 2)
+                size = (length, depth, float(u01(1.2, 2.2)))
                 add_box(
-                    u + length / 2,
-                    v,
-                    ground_z(u, v),
-                    length,
-                    0.05,
-                    float(u01(0.9, 1.7)),
-                    0.0,
-                    51,
-                    p=0.85,
+                    u + length / 2, v, ground_z(u, v), size, float(u01(-0.03, 0.03)), 70, p=0.85
                 )
-            u += length + float(u01(3.0, 12.0))
+            elif kind == 1:  # fence
+                v = side * (v_walk + 0.1)
+                size = (length, 0.05, float(u01(1.2, 1.9)))
+                add_box(u + length / 2, v, ground_z(u, v), size, 0.0, 51, p=0.85)
+            elif kind == 2:  # low wall
+                v = side * (v_walk + 0.15)
+                size = (length, 0.25, float(u01(0.6, 1.2)))
+                add_box(u + length / 2, v, ground_z(u, v), size, 0.0, 51)
+            if kind != 3 and rng.random() < 0.4:
+                ub = u + float(u01(0.3, 0.7)) * length
+                vb = side * (v_walk + garden_w[side] - float(u01(0.4, 0.6)))
+                if rng.random() < 0.4:
+                    trunk = (float(u01(0.1, 0.2)), float(u01(1.6, 2.4)))
+                    add_tree(ub, vb, *trunk, float(u01(1.0, 1.8)), float(u01(1.5, 3.0)))
+                else:
+                    size = (float(u01(0.8, 1.6)), float(u01(0.6, 1.0)), float(u01(1.8, 2.6)))
+                    add_box(ub, vb, ground_z(ub, vb), size, float(u01(-0.3, 0.3)), 70, p=0.8)
+            u += length + float(u01(1.2, 3.0))
 
-    # Trees on the terrain strip, bushes between them.
+    # Street trees in pits along the kerbs.
     for side in (-1.0, 1.0):
-        u = u_min + float(u01(0, 8))
+        u = u_min + float(u01(0, 6))
         while u < u_max:
-            v = side * (half_road + sidewalk_w + float(u01(0.7, terrain_w - 0.5)))
-            if rng.random() < 0.55:
-                r = float(u01(0.15, 0.3))
-                trunk_h = float(u01(2.0, 3.2))
-                zg = ground_z(u, v)
-                add_cyl(u, v, r, zg, trunk_h, 71)
-                add_cyl(
-                    u, v, float(u01(1.3, 2.3)), zg + trunk_h - 0.2, float(u01(2.0, 4.0)), 70, p=0.6
-                )
-                taken.add(u, v, r)
-            else:
-                length = float(u01(1.0, 3.5))
-                depth = float(u01(0.8, 1.5))
-                add_box(
-                    u,
-                    v,
-                    ground_z(u, v),
-                    length,
-                    depth,
-                    float(u01(0.6, 1.8)),
-                    float(u01(-0.3, 0.3)),
-                    70,
-                    p=0.7,
-                )
-                taken.add(u, v, max(length, depth) / 2)
-            u += float(u01(4.0, 12.0))
+            v = side * (kerb_v[side] + float(u01(0.45, 0.6)))
+            if rng.random() < 0.9:
+                trunk = (float(u01(0.2, 0.35)), float(u01(1.8, 2.8)))
+                add_tree(u, v, *trunk, float(u01(1.2, 2.2)), float(u01(2.0, 4.0)))
+            u += float(u01(4.0, 7.0))
 
-    # Poles near the kerb.
-    for side in (-1.0, 1.0):
-        u = u_min + float(u01(0, 20))
-        while u < u_max:
-            v = side * (half_road + float(u01(0.3, 0.6)))
-            r = float(u01(0.06, 0.12))
-            add_cyl(u, v, r, ground_z(u, v), float(u01(4.0, 8.0)), 80)
+    def furniture(kind: int, u: float, v: float) -> float:
+        """Place one piece of street furniture at (u, v); its length along the street (0: none)."""
+        zg = ground_z(u, v)
+        if kind == 0:  # street lamp
+            r = float(u01(0.1, 0.15))
+            if not taken.free(u, v, r + 0.4):
+                return 0.0
+            add_cyl(u, v, r, zg, float(u01(5.0, 8.0)), 80)
             taken.add(u, v, r)
-            u += float(u01(10.0, 25.0))
+            return 2 * r
+        if kind == 1:  # sign post with its sign
+            if not taken.free(u, v, 0.45):
+                return 0.0
+            h = float(u01(2.2, 2.8))
+            add_cyl(u, v, 0.05, zg, h, 80)
+            add_box(u, v, zg + h - 0.1, (0.05, float(u01(0.5, 0.8)), 0.6), 0.0, 81)
+            taken.add(u, v, 0.4)
+            return 0.6
+        if kind == 2:  # bollards, 1.2-1.6 m apart
+            step, n = float(u01(1.2, 1.6)), int(rng.integers(2, 5))
+            if not all(taken.free(u + i * step, v, 0.3) for i in range(n)):
+                return 0.0
+            for i in range(n):
+                r, h = float(u01(0.1, 0.13)), float(u01(0.8, 1.0))
+                add_cyl(u + i * step, v, r, ground_z(u + i * step, v), h, 99)
+                taken.add(u + i * step, v, 0.15)
+            return (n - 1) * step + 0.3
+        if kind == 3:  # litter bin, post box or parking meter
+            r = float(u01(0.2, 0.35))
+            if not taken.free(u, v, r + 0.4):
+                return 0.0
+            add_cyl(u, v, r, zg, float(u01(0.9, 1.4)), 99)
+            taken.add(u, v, r)
+            return 2 * r
+        if kind == 4:  # planter with a shrub
+            if not taken.free(u, v, 0.9):
+                return 0.0
+            size = (float(u01(1.0, 1.6)), float(u01(0.6, 0.9)), 0.6)
+            add_box(u, v, zg, size, 0.0, 99)
+            shrub = (size[0] - 0.2, size[1] - 0.1, float(u01(0.5, 1.2)))
+            add_box(u, v, zg + 0.6, shrub, 0.0, 70, p=0.8)
+            taken.add(u, v, size[0] / 2)
+            return size[0]
+        if kind == 5:  # bicycles at stands along the kerb, one behind the other
+            spots = [u + 0.85 + i * float(u01(2.0, 2.3)) for i in range(int(rng.integers(1, 4)))]
+            if not all(taken.free(a, v, 1.0) for a in spots):
+                return 0.0
+            for a in spots:
+                taken.add(a, v, 0.9)
+                size = (1.7, 0.12, float(u01(0.9, 1.1)))
+                yaw = float(u01(-0.1, 0.1))
+                add_box(a, v, ground_z(a, v), size, yaw, 11, new_instance(), p=0.8)
+            return spots[-1] - u + 0.85
+        if kind == 6:  # utility cabinet
+            if not taken.free(u, v, 0.7):
+                return 0.0
+            add_box(u, v, zg, (float(u01(0.7, 1.2)), 0.45, float(u01(1.1, 1.5))), 0.0, 52)
+            taken.add(u, v, 0.5)
+            return 1.0
+        if kind == 7:  # advertising column
+            r = float(u01(0.45, 0.55))
+            if not taken.free(u, v, r + 0.4):
+                return 0.0
+            add_cyl(u, v, r, zg, float(u01(2.6, 3.4)), 52)
+            taken.add(u, v, r)
+            return 2 * r
+        if kind == 8:  # bench
+            if not taken.free(u, v, 1.1):
+                return 0.0
+            add_box(u, v, zg, (float(u01(1.5, 2.0)), 0.6, float(u01(0.8, 0.9))), 0.0, 99)
+            taken.add(u, v, 0.9)
+            return 1.8
+        if kind == 9:  # cafe table with its chairs
+            if not taken.free(u, v, 1.0):
+                return 0.0
+            add_cyl(u, v, float(u01(0.3, 0.4)), zg, 0.75, 99)
+            for du in (-0.65, 0.65):
+                add_box(u + du, v, zg, (0.45, 0.45, 0.9), float(u01(-0.3, 0.3)), 99)
+            taken.add(u, v, 0.9)
+            return 1.8
+        if kind == 10:  # motorcycle or scooter parked along the kerb
+            if not taken.free(u, v, 1.2):
+                return 0.0
+            size = (float(u01(1.7, 2.1)), float(u01(0.6, 0.8)), float(u01(1.1, 1.3)))
+            add_box(u, v, zg + 0.1, size, float(u01(-0.2, 0.2)), 15, new_instance())
+            taken.add(u, v, 1.0)
+            return size[0]
+        return 0.0
 
-    # Parked vehicles along both kerbs: bumper to bumper runs and isolated cars.
-    n_parked = int(rng.integers(8, 15))
-    n_left = int(rng.integers(n_parked // 2 - 2, n_parked // 2 + 3))
-    truck_slot = int(rng.integers(0, n_parked)) if rng.random() < 0.5 else -1
-    parked: list[tuple[float, float, float, float, float]] = []  # u, v, length, width, side
-    slot = 0
-    for side, count in ((1.0, n_left), (-1.0, n_parked - n_left)):
-        u = float(u01(-30.0, -15.0))
-        for _ in range(count):
-            is_truck = slot == truck_slot
-            slot += 1
+    # Street furniture between the trees, on both sidewalks (busier on the wide one beside the ego
+    # lane): one row along the kerb and, on the shop side, one along the shop fronts.
+    kerb_kinds = [0, 1, 2, 3, 4, 5, 6, 7, 10]
+    kerb_p = [0.12, 0.12, 0.14, 0.14, 0.1, 0.16, 0.08, 0.06, 0.08]
+    front_kinds = [3, 4, 5, 8, 9]
+    front_p = [0.15, 0.25, 0.25, 0.15, 0.2]
+    rows = [(-1.0, 0.3, 0.5, 1.2, 3.0, kerb_kinds, kerb_p)]
+    rows.append((-1.0, walk_w[-1.0] - 0.6, walk_w[-1.0] - 0.4, 1.2, 3.5, front_kinds, front_p))
+    rows.append((1.0, 0.4, 0.6, 2.5, 7.0, kerb_kinds, kerb_p))
+    for side, v_lo, v_hi, gap_lo, gap_hi, kinds, p in rows:
+        u = u_lo + float(u01(0, 3))
+        while u < u_hi:
+            v = side * (kerb_v[side] + float(u01(v_lo, v_hi)))
+            length = furniture(int(rng.choice(kinds, p=p)), u, v)
+            u += length + float(u01(gap_lo, gap_hi))
+
+    # Parked vehicles along both kerbs, now and then a van or a truck: runs of cars, some bumper
+    # to bumper, some with gaps (driveways, loading zones).
+    for side in (-1.0, 1.0):
+        u = u_min + float(u01(5.0, 10.0))
+        while u < u_max - 12.0:
+            is_truck = side > 0 and rng.random() < 0.05
             if is_truck:
-                length, width = float(u01(7.0, 9.0)), float(u01(2.3, 2.5))
+                length, width = float(u01(6.5, 8.5)), float(u01(2.2, 2.45))
             else:
-                length, width = float(u01(3.9, 4.8)), float(u01(1.7, 1.9))
-            v = side * (half_road - float(u01(0.12, 0.3)) - width / 2)
+                length, width = float(u01(3.8, 4.8)), float(u01(1.7, 1.9))
+            v = side * (kerb_v[side] - float(u01(0.15, 0.3)) - width / 2)
             uc = u + length / 2
             yaw = float(rng.choice([0.0, np.pi])) + float(u01(-0.03, 0.03))
             zg = ground_z(uc, 0.0)
@@ -496,142 +629,78 @@ def _world(seed: int) -> _World:
             if is_truck:
                 cab_l = 2.0
                 sgn = 1.0 if abs(yaw) < 1 else -1.0
-                add_box(
-                    uc + sgn * (length / 2 - cab_l / 2),
-                    v,
-                    zg + 0.4,
-                    cab_l,
-                    width,
-                    2.6,
-                    yaw,
-                    18,
-                    inst,
-                )
-                add_box(
-                    uc - sgn * cab_l / 2,
-                    v,
-                    zg + 0.6,
-                    length - cab_l - 0.2,
-                    width + 0.05,
-                    3.2,
-                    yaw,
-                    18,
-                    inst,
-                )
+                uf = uc + sgn * (length / 2 - cab_l / 2)
+                add_box(uf, v, zg + 0.4, (cab_l, width, 2.6), yaw, 18, inst)
+                size = (length - cab_l - 0.2, width + 0.05, 3.2)
+                add_box(uc - sgn * cab_l / 2, v, zg + 0.6, size, yaw, 18, inst)
             else:
-                dark = rng.random() < 0.35
-                body_p = float(u01(0.4, 0.7)) if dark else 1.0
+                dark = rng.random() < 0.3
+                body_p = float(u01(0.6, 0.85)) if dark else 1.0
                 rem = float(u01(0.03, 0.1)) if dark else float(u01(0.3, 0.8))
-                dims = (length, width, float(u01(0.85, 1.05)), float(u01(1.45, 1.6)))
+                dims = (length, width, float(u01(0.85, 1.05)), float(u01(1.45, 1.65)))
                 boxes.extend(_car_boxes(uc, v + yc, zg, yaw, dims, 10, inst, body_p, rem))
-            parked.append((uc, v, length, width, side))
-            close = rng.random() < 0.45
-            u += length + (float(u01(0.5, 1.5)) if close else float(u01(4.0, 16.0)))
+            r = rng.random()
+            if r < 0.3:
+                gap = float(u01(0.3, 0.7))  # bumper to bumper
+            elif r < 0.9:
+                gap = float(u01(1.0, 2.5))
+            else:
+                gap = float(u01(3.5, 7.0))  # a driveway or a loading zone
+            u += length + gap
 
-    # Some parked cars touch a pole or a bush standing at the kerb.
-    for k in rng.permutation(len(parked))[:4]:
-        uc, v, length, width, side = parked[k]
-        ut = uc + float(u01(-0.3, 0.3)) * length
-        if rng.random() < 0.5:
-            r = float(u01(0.07, 0.12))
-            vp = side * (half_road + 0.05 + r)
-            if taken.free(ut, vp, r + 0.3):
-                add_cyl(ut, vp, r, ground_z(ut, vp), float(u01(3.0, 7.0)), 80)
-                taken.add(ut, vp, r)
-        else:
-            depth = float(u01(0.7, 1.2))
-            vb = side * (half_road + 0.05 + depth / 2)
-            length_b = float(u01(1.2, 2.5))
-            if taken.free(ut, vb, length_b / 2 + 0.3):
-                add_box(
-                    ut, vb, ground_z(ut, vb), length_b, depth, float(u01(0.8, 1.5)), 0.0, 70, p=0.7
-                )
-                taken.add(ut, vb, length_b / 2)
-
-    # Pedestrians on the sidewalks, some in groups.
-    n_people = int(rng.integers(3, 7))
+    # Pedestrians on the sidewalks (mostly on the shop side), some in groups.
+    n_people = int(rng.integers(40, 71))
     placed = 0
     tries = 0
-    while placed < n_people and tries < 200:
+    while placed < n_people and tries < 1000:
         tries += 1
-        side = float(rng.choice([-1.0, 1.0]))
-        u = float(u01(-15.0, 45.0))
-        v = side * (half_road + float(u01(0.9, sidewalk_w - 0.5)))
-        group = min(int(rng.choice([1, 1, 2, 3])), n_people - placed)
+        side = -1.0 if rng.random() < 0.7 else 1.0
+        u = float(u01(u_lo, u_hi))
+        v0 = 2.2 if side < 0 else 1.0  # not on the cycle track
+        v = side * (kerb_v[side] + float(u01(v0, walk_w[side] - 0.4)))
+        group = min(int(rng.choice([1, 1, 1, 2, 2, 3])), n_people - placed)
         spots = [(u + i * float(u01(0.6, 1.0)), v + float(u01(-0.15, 0.15))) for i in range(group)]
         if not all(taken.free(a, b, 0.45) for a, b in spots):
             continue
         for a, b in spots:
             taken.add(a, b, 0.3)
-            add_box(
-                a,
-                b,
-                ground_z(a, b),
-                float(u01(0.45, 0.6)),
-                float(u01(0.35, 0.5)),
-                float(u01(1.6, 1.9)),
-                float(u01(-np.pi, np.pi)),
-                30,
-                new_instance(),
-            )
+            size = (float(u01(0.45, 0.6)), float(u01(0.35, 0.5)), float(u01(1.6, 1.9)))
+            add_box(a, b, ground_z(a, b), size, float(u01(-np.pi, np.pi)), 30, new_instance())
             placed += 1
 
-    # Bicycles parked on the sidewalk.
-    for _ in range(int(rng.integers(1, 3))):
-        for _try in range(50):
-            side = float(rng.choice([-1.0, 1.0]))
-            u = float(u01(-10.0, 40.0))
-            v = side * (half_road + float(u01(0.8, sidewalk_w - 0.4)))
-            if taken.free(u, v, 1.0):
-                taken.add(u, v, 0.9)
-                zg = ground_z(u, v)
-                yaw = float(u01(-0.2, 0.2))
-                add_box(u, v, zg + 0.25, 1.7, 0.12, 0.8, yaw, 11, new_instance(), p=0.6)
-                break
+    # Traffic: a queue in the lane keeping its distance to the ego car, and cyclists both ways on
+    # the cycle track.
+    def car_dims() -> tuple[float, float, float, float]:
+        return (
+            float(u01(3.9, 4.8)),
+            float(u01(1.7, 1.9)),
+            float(u01(0.85, 1.05)),
+            float(u01(1.45, 1.6)),
+        )
 
-    # Moving cars: oncoming traffic in the left lane, maybe one car ahead in the ego lane.
-    moving: list[_MovingCar] = []
-    n_moving = int(rng.integers(1, 4))
-    speed = float(u01(8.0, 12.0))
-    ahead = n_moving > 1 and rng.random() < 0.5
-    n_oncoming = n_moving - int(ahead)
-    span = u_max - 10.0 - (u_min + 10.0)
-    start = float(u01(0.0, span))
-    for i in range(n_oncoming):
-        dims = (
-            float(u01(3.9, 4.8)),
-            float(u01(1.7, 1.9)),
-            float(u01(0.85, 1.05)),
-            float(u01(1.45, 1.6)),
-        )
-        x0 = u_min + 10.0 + (start + i * span / n_oncoming) % span
-        moving.append(
-            _MovingCar(x0, yc + 1.75, -speed, None, dims, new_instance(), float(u01(0.2, 0.8)), 1.0)
-        )
-    if ahead:
-        dims = (
-            float(u01(3.9, 4.8)),
-            float(u01(1.7, 1.9)),
-            float(u01(0.85, 1.05)),
-            float(u01(1.45, 1.6)),
-        )
-        moving.append(
-            _MovingCar(
-                float(u01(15.0, 35.0)),
-                0.0,
-                float(u01(10.0, 12.0)),
-                u_max - 12.0,
-                dims,
-                new_instance(),
-                float(u01(0.2, 0.8)),
-                1.0,
-            )
-        )
+    moving: list[_Mover] = []
+    gaps = [float(u01(6.0, 9.0))]
+    if rng.random() < 0.6:
+        gaps.append(gaps[0] + float(u01(11.0, 16.0)))
+    if rng.random() < 0.6:
+        gaps.append(-float(u01(9.0, 14.0)))
+    for gap in gaps:
+        phase = float(u01(0.0, 2.0 * np.pi))
+        rem = float(u01(0.2, 0.8))
+        moving.append(_Mover(phase, yc, 0.0, gap, car_dims(), new_instance(), rem))
+    span = u_max - u_min - 20.0
+    for _ in range(int(rng.integers(2, 6))):
+        x0 = u_min + 10.0 + float(u01(0.0, span))
+        y = yc - kerb_v[-1.0] - 1.5
+        dims = (1.75, 0.5, 1.0, float(u01(1.65, 1.85)))
+        rem = float(u01(0.2, 0.6))
+        speed = float(u01(4.0, 6.0)) * float(rng.choice([-1.0, 1.0]))
+        moving.append(_Mover(x0, y, speed, None, dims, new_instance(), rem, cyclist=True))
 
     return _World(
         slope=slope,
-        road_y=(yc - half_road, yc + half_road),
-        sidewalk_y=(yc - half_road - sidewalk_w, yc + half_road + sidewalk_w),
+        road_y=(yc - kerb_v[-1.0], yc + kerb_v[1.0]),
+        sidewalk_y=(yc - kerb_v[-1.0] - walk_w[-1.0], yc + kerb_v[1.0] + walk_w[1.0]),
         boxes=tuple(boxes),
         cylinders=tuple(cyls),
         moving=tuple(moving),
@@ -659,7 +728,7 @@ def make_scene(seed: int, frame: int) -> Scene:
     ----------
     seed : street seed; it fixes every object of the street.
     frame : frame number (10 Hz). The ego car moves forward 1 m per frame (and stops after about
-        60 m); moving cars advance at 8-12 m/s.
+        60 m); the cars in its lane keep their distance to it, cyclists ride at 4-6 m/s.
 
     Returns
     -------
@@ -683,6 +752,7 @@ def make_scene(seed: int, frame: int) -> Scene:
             b.p_return,
             b.remission,
             b.facade,
+            b.shopfront,
         )
 
     boxes = [shift_box(b) for b in w.boxes]
@@ -702,14 +772,27 @@ def make_scene(seed: int, frame: int) -> Scene:
     t = frame / _FPS
     lo, hi = w.wrap
     for m in w.moving:
-        x = m.x0 + m.speed * t
-        if m.x_stop is not None:
-            x = min(x, m.x_stop)
+        if m.follow is not None:
+            x = ex + m.follow + 0.8 * float(np.sin(0.6 * t + m.x0))
         else:
-            x = lo + (x - lo) % (hi - lo)
+            x = lo + (m.x0 + m.speed * t - lo) % (hi - lo)
         zg = -SENSOR_HEIGHT_M + w.slope * x
-        yaw = 0.0 if m.speed > 0 else np.pi
-        for b in _car_boxes(x, m.y, zg, yaw, m.dims, 252, m.instance, m.body_p, m.remission):
+        if m.cyclist:
+            length, width, saddle, top = m.dims
+            bike = Box((x, m.y, zg + saddle / 2), (length / 2, 0.08, saddle / 2), 0.0, 31)
+            rider = Box(
+                (x - 0.1, m.y, (zg + saddle + zg + top) / 2),
+                (0.25, width / 2, (top - saddle) / 2),
+                0.0,
+                31,
+            )
+            for b in (bike, rider):
+                boxes.append(
+                    shift_box(replace(b, instance=m.instance, p_return=0.8, remission=m.remission))
+                )
+            continue
+        yaw = np.pi if m.speed < 0 else 0.0
+        for b in _car_boxes(x, m.y, zg, yaw, m.dims, 252, m.instance, 1.0, m.remission):
             boxes.append(shift_box(b))
     ground = Ground(w.slope, w.road_y, w.sidewalk_y)
     return Scene(int(seed), int(frame), pose, ground, boxes, cyls)
@@ -763,8 +846,30 @@ def _safe(d: np.ndarray) -> np.ndarray:
     return np.where(np.abs(d) < 1e-12, 1e-12, d)
 
 
+def _vehicle_hits(
+    vehicle: tuple[Box, ...], dx: np.ndarray, dy: np.ndarray, dz: np.ndarray
+) -> np.ndarray:
+    """(H, W) bool: rays that hit a box of the recording vehicle (axis-aligned, sensor frame)."""
+    hit = np.zeros(dx.shape, dtype=bool)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        for b in vehicle:
+            tnear = np.zeros(dx.shape)
+            tfar = np.full(dx.shape, np.inf)
+            for d, c, hw in zip((dx, dy, dz), b.center, b.half, strict=True):
+                d = _safe(d)
+                t1, t2 = (c - hw) / d, (c + hw) / d
+                tnear = np.maximum(tnear, np.minimum(t1, t2))
+                tfar = np.minimum(tfar, np.maximum(t1, t2))
+            hit |= tnear <= tfar
+    return hit
+
+
 def _cast_full(
-    scene: Scene, pitch_deg: np.ndarray, azimuths_rad: np.ndarray, rng: np.random.Generator
+    scene: Scene,
+    pitch_deg: np.ndarray,
+    azimuths_rad: np.ndarray,
+    rng: np.random.Generator,
+    vehicle: tuple[Box, ...] = (),
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """:func:`cast` plus the remission of every return."""
     pitch = np.asarray(pitch_deg, dtype=np.float64).reshape(-1)
@@ -811,7 +916,7 @@ def _cast_full(
     rem[ground_hit] = np.vectorize(_REMISSION.get, otypes=[float])(sem[ground_hit])
     # Far ground at grazing incidence returns less and less (dark asphalt).
     r_g = np.where(ground_hit, best_t, 0.0)
-    p_ret = np.where(ground_hit, np.clip(1.0 - (r_g - 25.0) / 60.0, 0.15, 1.0), 1.0)
+    p_ret = np.where(ground_hit, np.clip(1.0 - (r_g - _GRAZE_M[0]) / _GRAZE_M[1], 0.05, 1.0), 1.0)
 
     # --- boxes: slab test in the box's own frame ----------------------------------------------
     for b in scene.boxes:
@@ -845,16 +950,26 @@ def _cast_full(
         if not hit.any():
             continue
         pr = np.full(hit.shape, b.p_return)
+        t_hit = tnear
         if b.facade:
-            # Glazed windows: a grid of panes on every vertical face; glass mostly returns nothing.
+            # Glazed windows on every vertical face. A ray through the glass returns from the room
+            # behind it (a wall or a shelf at a depth fixed per window) or not at all. A shop's
+            # ground floor is glazed from the pavement up, between narrow pillars.
             on_x_face = txn >= np.maximum(tyn, tzn)
             along = np.where(on_x_face, oy + tnear * ly_d, ox + tnear * lx_d)
-            up = oz + tnear * lz_d + hz
-            pane = ((along % 2.6) > 0.6) & ((along % 2.6) < 2.0)
-            pane &= ((up % 3.0) > 0.9) & ((up % 3.0) < 2.4) & (up > 0.9)
+            up = oz + tnear * lz_d + hz - 0.3  # height above the pavement
+            bay = 2.4 if b.shopfront else 2.2
+            a = along % bay
+            pane = (a > 0.5) & (a < 1.7) & ((up % 3.0) > 0.9) & ((up % 3.0) < 2.4)
+            if b.shopfront:
+                pane |= (a > 0.45) & (up > 0.0) & (up < 2.8)
             pane &= tzn < np.maximum(txn, tyn)  # not on the roof
-            pr = np.where(pane, 0.25, pr)
-        sub_best[hit] = tnear[hit]
+            window = np.floor(along / bay) * 31.0 + np.floor(up / 3.0)
+            key = 12.9898 * hx + 78.233 * hy + 37.719 * hz
+            depth = 1.5 + 4.0 * ((np.sin(window * 12.9898 + key) * 43758.5453) % 1.0)
+            t_hit = np.where(pane, tnear + depth, tnear)
+            pr = np.where(pane, 0.85, pr)
+        sub_best[hit] = t_hit[hit]
         best_t[ix] = sub_best
         for arr, val in ((sem, b.semantic), (inst, b.instance), (rem, b.remission)):
             sub = arr[ix]
@@ -916,8 +1031,13 @@ def _cast_full(
     # --- sensor effects ------------------------------------------------------------------------
     u = rng.random((h, w))
     noise = rng.normal(0.0, 0.015, (h, w))
-    global_drop = 0.045
+    global_drop = 0.015
+    # Dark paint returns less and less with range (full up to 2 m, the base rate from 15 m on).
+    dark = (rem < 0.12) & (p_ret < 1.0)
+    p_ret = np.where(dark, 1.0 - (1.0 - p_ret) * np.clip((best_t - 2.0) / 13.0, 0.0, 1.0), p_ret)
     valid = np.isfinite(best_t) & (best_t <= MAX_RANGE_M)
+    if vehicle:
+        valid &= ~_vehicle_hits(vehicle, dx, dy, dz)
     valid &= u < p_ret * (1.0 - global_drop)
     ranges = np.where(valid, best_t + noise, 0.0)
     valid &= ranges > 0
@@ -929,7 +1049,11 @@ def _cast_full(
 
 
 def cast(
-    scene: Scene, pitch_deg: np.ndarray, azimuths_rad: np.ndarray, rng: np.random.Generator
+    scene: Scene,
+    pitch_deg: np.ndarray,
+    azimuths_rad: np.ndarray,
+    rng: np.random.Generator,
+    vehicle: tuple[Box, ...] = (),
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Cast a grid of rays from the sensor into the scene (first hit, vectorised over rays).
 
@@ -940,17 +1064,20 @@ def cast(
     azimuths_rad : (W,) column azimuth in radians (counter-clockwise from +x), one per column.
     rng : source of the sensor noise (range noise, dropouts); pass a seeded generator for
         reproducible output.
+    vehicle : boxes of the recording car in the sensor frame (axis-aligned, e.g.
+        :data:`EGO_VEHICLE`); a ray that hits one returns nothing. Default: none.
 
     Returns
     -------
     ranges : (H, W) float32
-        Range in metres, 0 = no return (nothing within :data:`MAX_RANGE_M`, or a dropout).
+        Range in metres, 0 = no return (nothing within :data:`MAX_RANGE_M`, the ray hit the
+        recording car, or a dropout).
     semantic : (H, W) uint16
         SemanticKITTI raw class id of every return, 0 where there is none.
     instance : (H, W) uint16
         Instance id of every return (things only), 0 elsewhere.
     """
-    ranges, sem, inst, _ = _cast_full(scene, pitch_deg, azimuths_rad, rng)
+    ranges, sem, inst, _ = _cast_full(scene, pitch_deg, azimuths_rad, rng, vehicle)
     return ranges, sem, inst
 
 
@@ -1018,14 +1145,16 @@ def _atomic_write(path: Path, data: bytes) -> None:
 def _moosmann_frame(seed: int, frame: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(ranges, semantic, instance) of a Moosmann frame, 64 x 870."""
     rng = np.random.default_rng([seed, frame, 2])
-    return cast(make_scene(seed, frame), HDL64_PITCH_DEG, moosmann_azimuths(), rng)
+    scene = make_scene(seed, frame)
+    return cast(scene, HDL64_PITCH_DEG, moosmann_azimuths(), rng, EGO_VEHICLE)
 
 
 def _kitti_frame(seed: int, frame: int, width: int) -> tuple[np.ndarray, np.ndarray]:
     """Points (N, 4) float32 in scan order and labels (N,) uint32 of a KITTI frame."""
     rng = np.random.default_rng([seed, frame, 1])
     az = kitti_azimuths(width)
-    ranges, sem, inst, rem = _cast_full(make_scene(seed, frame), HDL64_PITCH_DEG, az, rng)
+    scene = make_scene(seed, frame)
+    ranges, sem, inst, rem = _cast_full(scene, HDL64_PITCH_DEG, az, rng)
     el = -np.radians(HDL64_PITCH_DEG)[:, None]
     r = ranges.astype(np.float64)
     xyz = np.stack(
@@ -1128,11 +1257,11 @@ def write_sample(
 
 def default_sample_dir() -> Path:
     """Per-user cache folder of the embedded sample: ``$FLIC_SAMPLE_DIR`` or
-    ``~/.cache/flic/sample-v1``."""
+    ``~/.cache/flic/sample-v2`` (the version changes whenever the generated content does)."""
     env = os.environ.get("FLIC_SAMPLE_DIR")
     if env:
         return Path(env).expanduser()
-    return Path.home() / ".cache" / "flic" / "sample-v1"
+    return Path.home() / ".cache" / "flic" / "sample-v2"
 
 
 def ensure_sample(frames: int = 20, seed: int = 0) -> SamplePaths:

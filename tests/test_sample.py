@@ -9,6 +9,8 @@ import pytest
 from PIL import Image
 
 from flic_cli import sample
+from flic_cli.ground import paper_ground
+from flic_cli.io import open_dataset
 from flic_cli.range_image import project_points
 
 FRAMES = 3
@@ -136,8 +138,9 @@ def test_moosmann_geometry_matches_kitti() -> None:
     assert np.degrees(az[0]) == pytest.approx(180.0) and np.degrees(az[-1]) == pytest.approx(-180)
     scene = sample.make_scene(0, 0)
     r, _, _ = sample.cast(scene, sample.HDL64_PITCH_DEG, az, np.random.default_rng(1))
-    # The lowest beam looking straight ahead (columns ~434.5) hits the rising road at
-    # r = h / (sin(pitch) + slope cos(pitch)); looking back (column 0) the road falls away.
+    # Without the recording car, the lowest beam looking straight ahead (columns ~434.5) hits the
+    # rising road at r = h / (sin(pitch) + slope cos(pitch)); looking back (column 0) the road
+    # falls away.
     pitch = np.radians(sample.HDL64_PITCH_DEG[-1])
     slope = scene.ground.slope
     for cols, sgn in ((slice(433, 437), 1.0), (slice(0, 2), -1.0)):
@@ -145,6 +148,41 @@ def test_moosmann_geometry_matches_kitti() -> None:
         got = r[-1, cols]
         got = got[got > 0]
         assert got.size and np.all(np.abs(got - expect) < 0.06)
+    # Every road return lies on the road plane z = -h + slope x, with or without the car.
+    for vehicle in ((), sample.EGO_VEHICLE):
+        r, sem, _ = sample.cast(
+            scene, sample.HDL64_PITCH_DEG, az, np.random.default_rng(1), vehicle
+        )
+        rows, cols = np.nonzero(sem == 40)
+        assert rows.size > 500
+        p = np.radians(sample.HDL64_PITCH_DEG)[rows]
+        expect = sample.SENSOR_HEIGHT_M / (np.sin(p) + slope * np.cos(p) * np.cos(az[cols]))
+        assert np.all(np.abs(r[rows, cols] - expect) < 0.08)
+
+
+def test_recording_car_hides_the_lower_beams_ahead_and_behind() -> None:
+    az = sample.moosmann_azimuths()
+    scene = sample.make_scene(0, 0)
+    free, _, _ = sample.cast(scene, sample.HDL64_PITCH_DEG, az, np.random.default_rng(3))
+    hidden, sem, _ = sample.cast(
+        scene, sample.HDL64_PITCH_DEG, az, np.random.default_rng(3), sample.EGO_VEHICLE
+    )
+    gone = (free > 0) & (hidden == 0)
+    # The car only removes returns (the noise is drawn the same way); empty pixels have no label.
+    assert np.array_equal(hidden[hidden > 0], free[hidden > 0])
+    assert not sem[hidden == 0].any()
+    # It hides the beams steeper than 14 deg ahead and 11 deg behind (10.6 deg past the rear
+    # corners), none of the upper block, and sideways even the lowest beam clears it.
+    pitch = sample.HDL64_PITCH_DEG
+    assert not gone[pitch < 10.5].any()
+    ahead, behind, left = 434, 0, 217
+    assert (hidden[pitch > 14.5, ahead] == 0).all() and (free[pitch > 14.5, ahead] > 0).any()
+    assert (hidden[pitch > 11.5, behind] == 0).all()
+    assert (hidden[-1, left - 20 : left + 20] > 0).any()
+    assert 7000 < int(gone.sum()) < 11000
+    # Every row keeps returns on both sides.
+    sides = np.abs(np.abs(np.degrees(az)) - 90.0) < 45.0
+    assert (hidden[:, sides] > 0).sum(axis=1).min() > 50
 
 
 def test_car_roofs(written: sample.SamplePaths) -> None:
@@ -172,14 +210,33 @@ def test_car_roofs(written: sample.SamplePaths) -> None:
 def test_instances_and_scene_content() -> None:
     scene = sample.make_scene(0, 0)
     classes = {p.semantic for p in [*scene.boxes, *scene.cylinders]}
-    assert {50, 51, 70, 71, 80, 10, 252, 30, 11} <= classes
+    assert {50, 51, 52, 70, 71, 80, 81, 99, 10, 252, 30, 31, 11} <= classes
     things = scene.instances
     assert all(c in THINGS for c in things.values())
-    assert 8 <= sum(c in (10, 18) for c in things.values()) <= 14
+    # Both kerbs are lined with parked cars over the 190 m street.
+    parked = [p for p in scene.boxes if p.semantic in (10, 18) and p.instance]
+    assert 50 <= len({p.instance for p in parked}) <= 80
+    assert {np.sign(p.center[1]) for p in parked} == {-1.0, 1.0}
     assert 1 <= sum(c == 252 for c in things.values()) <= 3
-    assert 3 <= sum(c == 30 for c in things.values()) <= 6
+    assert 40 <= sum(c == 30 for c in things.values()) <= 70
+    assert 2 <= sum(c == 31 for c in things.values()) <= 5
     for p in [*scene.boxes, *scene.cylinders]:
         assert (p.instance > 0) == (p.semantic in THINGS)
+
+
+def test_moosmann_frames_look_like_real_logs(written: sample.SamplePaths) -> None:
+    """Frame 0 of seed 0: valid and non-ground pixel counts in the range of real Moosmann frames.
+
+    Real logs hold 40k-48k valid pixels of 870 x 64, 37k-43k after the paper's ground removal.
+    """
+    ds = open_dataset(written.moosmann_log)
+    image = ds.load(ds.refs()[0]).image
+    valid = int(np.count_nonzero(image.ranges > 0))
+    non_ground = valid - int(np.count_nonzero(paper_ground(image)))
+    assert 40000 <= valid <= 48000
+    assert 37000 <= non_ground <= 43000
+    # Some road and sidewalk is left for the ground extraction.
+    assert 2000 <= valid - non_ground <= 8000
 
 
 def test_ensure_sample(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
@@ -204,4 +261,4 @@ def test_ensure_sample(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
 
 def test_default_sample_dir(monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.delenv("FLIC_SAMPLE_DIR", raising=False)
-    assert sample.default_sample_dir() == Path.home() / ".cache" / "flic" / "sample-v1"
+    assert sample.default_sample_dir() == Path.home() / ".cache" / "flic" / "sample-v2"
