@@ -1,7 +1,7 @@
 """What a timing depends on: thread pools, CPU, library versions.
 
-:func:`pin_thread_env` must run before numpy, scipy or numba are imported (the thread pools of
-OpenMP, OpenBLAS, MKL and numba read these variables once, at import); :func:`thread_limits` then
+:func:`pin_thread_env` must run before numpy or scipy are imported (the thread pools of OpenMP,
+OpenBLAS and MKL read these variables once, at import); :func:`thread_limits` then
 enforces the limit at run time as well (``numba.set_num_threads`` and ``threadpoolctl``), which
 also covers a process that imported numpy earlier. :func:`collect_environment` records what was
 in effect.
@@ -20,7 +20,9 @@ from datetime import datetime, timezone
 from importlib import metadata
 from typing import Any
 
-#: Environment variables that size the thread pools of OpenMP, the BLAS libraries and numba.
+#: Environment variables that size the thread pools of OpenMP and the BLAS libraries. numba's
+#: pool is sized at run time only (``numba.set_num_threads``): changing ``NUMBA_NUM_THREADS`` in a
+#: process that has imported numba makes its next compilation fail, and flic's kernels are serial.
 THREAD_ENV_VARS = (
     "OMP_NUM_THREADS",
     "OPENBLAS_NUM_THREADS",
@@ -28,7 +30,6 @@ THREAD_ENV_VARS = (
     "BLIS_NUM_THREADS",
     "VECLIB_MAXIMUM_THREADS",
     "NUMEXPR_NUM_THREADS",
-    "NUMBA_NUM_THREADS",
 )
 
 #: Distributions whose versions go into the record (import name -> distribution name).
@@ -47,9 +48,6 @@ _VERSIONED = {
 def pin_thread_env(threads: int) -> dict[str, str]:
     """Set the thread-pool environment variables to ``threads`` (before heavy imports).
 
-    ``NUMBA_NUM_THREADS`` is only set when numba is not imported yet (numba reads it once and
-    refuses a later ``set_num_threads`` above it).
-
     Parameters
     ----------
     threads : threads per pool, >= 1.
@@ -61,8 +59,6 @@ def pin_thread_env(threads: int) -> dict[str, str]:
     """
     value = str(int(threads))
     for name in THREAD_ENV_VARS:
-        if name == "NUMBA_NUM_THREADS" and "numba" in sys.modules:
-            continue
         os.environ[name] = value
     return {name: os.environ[name] for name in THREAD_ENV_VARS if name in os.environ}
 
