@@ -55,6 +55,23 @@ ConfigOpt = Annotated[
 ]
 
 
+MethodOpt = Annotated[
+    str,
+    typer.Option(help="`flic`, `bogoslavskyi`, `dbscan` or any [methods.NAME] of the config."),
+]
+McOpt = Annotated[
+    int | None, typer.Option(help="Map Connections for `--method flic`: 0, 1, 6 or 14.")
+]
+OwnGroundOpt = Annotated[
+    str,
+    typer.Option(
+        "--ground-remover",
+        help="`own` (each method's own, e.g. Bogoslavskyi's for bogoslavskyi), `paper` or "
+        "`bogoslavskyi`.",
+    ),
+]
+
+
 def _fail(message: str) -> None:
     typer.echo(f"error: {message}", err=True)
     raise typer.Exit(2)

@@ -11,6 +11,8 @@ from flic_cli.cli.app import (
     ConfigOpt,
     DataArg,
     FramesOpt,
+    McOpt,
+    MethodOpt,
     SequencesOpt,
     _data_or_sample,
     _selection,
@@ -176,13 +178,8 @@ def evaluate(
 @friendly_errors
 def sweep_threshold(
     data: DataArg = None,
-    method: Annotated[
-        str,
-        typer.Option(help="`flic`, `bogoslavskyi`, `dbscan` or any [methods.NAME] of the config."),
-    ] = "flic",
-    mc: Annotated[
-        int | None, typer.Option(help="Map Connections for `--method flic`: 0, 1, 6 or 14.")
-    ] = None,
+    method: MethodOpt = "flic",
+    mc: McOpt = None,
     start: Annotated[
         float | None,
         typer.Option("--from", help="First value (FLIC/DBSCAN metres, Bogoslavskyi degrees)."),

@@ -11,6 +11,9 @@ from flic_cli.cli.app import (
     ConfigOpt,
     DataArg,
     FramesOpt,
+    McOpt,
+    MethodOpt,
+    OwnGroundOpt,
     SequencesOpt,
     SettingOpt,
     _data_or_sample,
@@ -32,13 +35,8 @@ from flic_cli.cli.app import (
 @friendly_errors
 def segment(
     data: DataArg = None,
-    method: Annotated[
-        str,
-        typer.Option(help="`flic`, `bogoslavskyi`, `dbscan` or any [methods.NAME] of the config."),
-    ] = "flic",
-    mc: Annotated[
-        int | None, typer.Option(help="Map Connections for `--method flic`: 0, 1, 6 or 14.")
-    ] = None,
+    method: MethodOpt = "flic",
+    mc: McOpt = None,
     out: Annotated[Path, typer.Option(help="Output root for sequences/NN/predictions/.")] = Path(
         "flic-out/segment"
     ),
@@ -46,13 +44,7 @@ def segment(
     frames: FramesOpt = None,
     setting: SettingOpt = "ground",
     config: ConfigOpt = None,
-    ground_remover: Annotated[
-        str,
-        typer.Option(
-            help="`own` (each method's own, e.g. Bogoslavskyi's for bogoslavskyi), `paper` or "
-            "`bogoslavskyi`."
-        ),
-    ] = "own",
+    ground_remover: OwnGroundOpt = "own",
     render: Annotated[
         int | None,
         typer.Option(help="Also write a PNG of this frame number, coloured by cluster."),
