@@ -15,20 +15,10 @@ from collections.abc import Callable, Iterable, Iterator
 from typing import Any, TypeVar
 
 from flic_cli.errors import FlicInputError
+from flic_cli.runs.environment import THREAD_ENV_VARS
 
 T = TypeVar("T")
 R = TypeVar("R")
-
-#: Thread-pool variables set to 1 in worker processes (read by BLAS/OpenMP at import). numba's
-#: kernels here are serial (no ``parallel=True``), so its pool is left alone.
-THREAD_ENV = (
-    "OMP_NUM_THREADS",
-    "OPENBLAS_NUM_THREADS",
-    "MKL_NUM_THREADS",
-    "BLIS_NUM_THREADS",
-    "VECLIB_MAXIMUM_THREADS",
-    "NUMEXPR_NUM_THREADS",
-)
 
 
 class SingleThreaded:
@@ -43,7 +33,7 @@ class SingleThreaded:
         self.func = func
 
     def __call__(self, item: Any) -> Any:
-        for name in THREAD_ENV:
+        for name in THREAD_ENV_VARS:  # read by BLAS/OpenMP at import in a fresh worker
             os.environ.setdefault(name, "1")
         try:
             from threadpoolctl import threadpool_limits
