@@ -15,13 +15,14 @@ from typer.testing import CliRunner
 from flic_cli.cli import app
 from flic_cli.errors import FlicInputError
 from flic_cli.metrics import IOU_THRESHOLDS
+from flic_cli.runs.environment import THREAD_ENV_VARS
 from flic_cli.runs.evaluate import (
     FRAME_COLUMNS,
     OBJECT_COLUMNS,
     SCORE_COLUMNS,
     TABLE_COLUMNS,
 )
-from flic_cli.runs.parallel import THREAD_ENV, imap_frames
+from flic_cli.runs.parallel import imap_frames
 
 runner = CliRunner()
 METHODS = "bogoslavskyi,flic1,flic14"
@@ -41,7 +42,7 @@ TIMING = ["seconds", "ms_per_frame_median"]
 @pytest.fixture(autouse=True)
 def _restore_thread_env(monkeypatch: pytest.MonkeyPatch) -> None:
     """Workers in this process (dask with processes=False) set the thread variables: restore."""
-    for name in THREAD_ENV:
+    for name in THREAD_ENV_VARS:
         monkeypatch.setenv(name, "1")
 
 
