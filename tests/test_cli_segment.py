@@ -127,3 +127,26 @@ def test_bad_input_is_one_line_exit_2(small_sample, tmp_path, args, message):
     lines = [line for line in result.output.splitlines() if line.startswith("error:")]
     assert len(lines) == 1 and message in lines[0], result.output
     assert "Traceback" not in result.output
+
+
+def test_spherical_projection_by_config(small_sample, tmp_path):
+    cfg = tmp_path / "spherical.toml"
+    cfg.write_text('[projection]\nmode = "spherical"\n')
+    result = _segment(small_sample.kitti_root, "--config", cfg, "--out", tmp_path / "s")
+    assert result.exit_code == 0, result.output
+    rings = _segment(small_sample.kitti_root, "--out", tmp_path / "r")
+    coverage = [float(r.output.split("coverage ")[1].split("%")[0]) for r in (result, rings)]
+    assert coverage[0] < coverage[1]  # the synthetic scan is in sensor order: rings cover more
+
+
+def test_empty_moosmann_frame_is_segmented_to_nothing(small_sample, tmp_path):
+    import shutil
+
+    from flic_cli.io.moosmann import write_png_range
+
+    log = tmp_path / "log"
+    shutil.copytree(small_sample.moosmann_log, log)
+    write_png_range(log / "scan00001.png", np.zeros((64, 870), np.float32))
+    result = _segment(log, "--out", tmp_path / "out")
+    assert result.exit_code == 0, result.output
+    assert read_predictions(tmp_path / "out", "log", 1).size == 0
