@@ -11,6 +11,7 @@ from scipy.sparse.csgraph import connected_components
 
 from flic_cli.methods import bogoslavskyi_labels, dbscan_labels, drop_small, flic_labels
 from flic_cli.methods.bogoslavskyi import bogoslavskyi_beta
+from flic_cli.methods.flic import flic_labels_scipy
 from flic_cli.range_image import RangeImage
 
 
@@ -113,6 +114,22 @@ def test_flic_equals_components_of_3d_distance_graph(image, threshold, maps, mc_
     np.testing.assert_array_equal(got, canonical(got))  # numbered 1..K in raster order
 
 
+@settings(max_examples=300, deadline=None)
+@given(
+    image=range_images(),
+    threshold=st.floats(0.3, 3.0),
+    maps=maps_strategy,
+    mc_mode=st.sampled_from(["map", "neighbour"]),
+    min_size=st.integers(1, 4),
+)
+def test_scipy_reference_equals_the_kernel(image, threshold, maps, mc_mode, min_size):
+    ranges, elevation = image
+    maps = tuple(m[:2] if m[2] == m[3] == 0 else m for m in maps)
+    fast = flic_labels(ranges, elevation, threshold, min_size, maps, mc_mode)
+    ref = flic_labels_scipy(ranges, elevation, threshold, min_size, maps, mc_mode)
+    np.testing.assert_array_equal(ref, fast)
+
+
 @settings(max_examples=200, deadline=None)
 @given(image=range_images(), angle=st.floats(2.0, 60.0), min_size=st.integers(1, 3))
 def test_bogoslavskyi_equals_components_of_atan2_graph(image, angle, min_size):
@@ -190,3 +207,27 @@ def test_dbscan_labels_two_blobs_and_min_size():
 def test_drop_small_relabels_in_order_of_appearance():
     out = drop_small(np.array([5, 5, 0, 3, 3, 3, 9, -1]), 2)
     np.testing.assert_array_equal(out, [1, 1, 0, 2, 2, 2, 0, 0])
+
+
+def test_flic_backends_agree_on_a_real_sized_scan(small_sample):
+    from flic_cli.config import build_method, load_config
+    from flic_cli.ground import paper_ground
+    from flic_cli.io import open_dataset
+
+    ds = open_dataset(small_sample.moosmann_log)
+    frame = ds.load(ds.refs()[0])
+    ground = paper_ground(frame.image)
+    cfg = load_config()
+    for name in ("flic0", "flic14"):
+        fast = build_method(cfg, name).segment(frame.image, frame.points, ground)
+        ref = build_method(cfg, name, backend="scipy").segment(frame.image, frame.points, ground)
+        np.testing.assert_array_equal(fast, ref)
+        assert fast.max() > 10
+
+
+def test_unknown_backend_is_refused():
+    from flic_cli.config import build_method, load_config
+    from flic_cli.errors import FlicInputError
+
+    with pytest.raises(FlicInputError, match="backend must be one of"):
+        build_method(load_config(), "flic0", backend="cuda")

@@ -48,6 +48,95 @@ def connection_sets(
     )
 
 
+def _linked(d1: np.ndarray, d2: np.ndarray, cos_a: np.ndarray, t2: float) -> np.ndarray:
+    return d1 * d1 + d2 * d2 - 2.0 * cos_a * d1 * d2 < t2
+
+
+def _row_cos(elevation: np.ndarray, cols: float, width: int) -> np.ndarray:
+    """(H, 1) cos of the angle between two rays of one row ``cols`` columns apart."""
+    ce2 = np.cos(elevation) ** 2
+    return (ce2 * np.cos(cols * 2.0 * np.pi / width) + (1.0 - ce2))[:, None]
+
+
+def flic_labels_scipy(
+    ranges: np.ndarray,
+    elevation: np.ndarray,
+    threshold_m: float = 0.8,
+    min_size: int = 100,
+    maps: tuple = (),
+    mc_mode: str = "map",
+    mask: np.ndarray | None = None,
+) -> np.ndarray:
+    """FLIC the way the paper implements it, with scipy: same result as :func:`flic_labels`.
+
+    The direct connections become a super-sized binary image (measurements on even rows and
+    columns, a "connected" pixel between each linked pair) labelled by ``scipy.ndimage.label``
+    with 4-connectivity; the 360 deg seam and every Map Connection then add pairs of direct
+    labels, merged by ``scipy.sparse.csgraph.connected_components``. Kept as the reference (the
+    tests check the numba kernel against it) and as the paper-style peer in benchmarks
+    (``backend = "scipy"``). Parameters as :func:`flic_labels`.
+    """
+    from scipy import ndimage
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    from flic_cli.methods.base import drop_small
+
+    d = np.asarray(ranges, dtype=np.float64)
+    el = np.asarray(elevation, dtype=np.float64)
+    h, w = d.shape
+    valid = d > 0 if mask is None else np.asarray(mask, dtype=bool) & (d > 0)
+    t2 = float(threshold_m) ** 2
+    steps, offsets, lattice = connection_sets(maps, mc_mode)
+    vert = valid[:-1] & valid[1:] & _linked(d[:-1], d[1:], np.cos(el[:-1] - el[1:])[:, None], t2)
+    right = np.roll(d, -1, axis=1)
+    horiz = valid & np.roll(valid, -1, axis=1) & _linked(d, right, _row_cos(el, 1, w), t2)
+    big = np.zeros((2 * h - 1, 2 * w), dtype=bool)
+    big[0::2, 0::2] = valid
+    big[0::2, 1:-1:2] = horiz[:, :-1]
+    big[1::2, 0::2] = vert
+    big_labels, n = ndimage.label(big)
+    direct = big_labels[0::2, 0::2]
+    # Extra edges as pairs of pixels (flat indices): the seam, then every Map Connection.
+    rows = np.arange(h)
+    pairs = [(rows * w + w - 1)[horiz[:, -1]], (rows * w)[horiz[:, -1]]]
+    idx = np.arange(h * w).reshape(h, w)
+    for (kr, kc), (orow, ocol), lat in zip(steps[1:], offsets[1:], lattice[1:], strict=True):
+        if lat:
+            r_sel = np.arange(orow % kr, h, kr)
+            c_sel = np.arange(ocol % kc, w, kc)
+            if r_sel.size == 0 or c_sel.size == 0:
+                continue
+            sub_d, sub_v, sub_i = (a[np.ix_(r_sel, c_sel)] for a in (d, valid, idx))
+            gaps = np.diff(np.append(c_sel, c_sel[0] + w))  # columns to the next lattice column
+            ce2 = np.cos(el[r_sel])[:, None] ** 2
+            cos_h = ce2 * np.cos(gaps[None, :] * 2.0 * np.pi / w) + (1.0 - ce2)
+            nxt = np.roll(np.arange(c_sel.size), -1)
+            ok = sub_v & sub_v[:, nxt] & _linked(sub_d, sub_d[:, nxt], cos_h, t2)
+            ok &= sub_i != sub_i[:, nxt]
+            pairs += [sub_i[ok], sub_i[:, nxt][ok]]
+            el_sub = el[r_sel]
+        else:
+            sub_d, sub_v, sub_i, el_sub = d, valid, idx, el
+            nd = np.roll(d, -kc, axis=1)
+            ok = valid & np.roll(valid, -kc, axis=1) & _linked(d, nd, _row_cos(el, kc, w), t2)
+            ok &= idx != np.roll(idx, -kc, axis=1)
+            pairs += [idx[ok], np.roll(idx, -kc, axis=1)[ok]]
+        step = 1 if lat else kr
+        if sub_d.shape[0] > step:
+            up, down = sub_d[:-step], sub_d[step:]
+            cos_v = np.cos(el_sub[:-step] - el_sub[step:])[:, None]
+            ok = sub_v[:-step] & sub_v[step:] & _linked(up, down, cos_v, t2)
+            pairs += [sub_i[:-step][ok], sub_i[step:][ok]]
+    flat = direct.reshape(-1)
+    a = flat[np.concatenate(pairs[0::2])]
+    b = flat[np.concatenate(pairs[1::2])]
+    graph = coo_matrix((np.ones(a.size), (a, b)), shape=(n + 1, n + 1))
+    _, merged = connected_components(graph, directed=False)
+    labels = np.where(flat > 0, merged[flat] + 1, 0)
+    return drop_small(labels, min_size).reshape(h, w)
+
+
 def flic_labels(
     ranges: np.ndarray,
     elevation: np.ndarray,
@@ -96,24 +185,33 @@ def flic_labels(
     )
 
 
+BACKENDS = {"numba": flic_labels, "scipy": flic_labels_scipy}
+
+
 @dataclass(frozen=True)
 class Flic:
-    """FLIC as a :class:`flic_cli.methods.base.Method` (see :func:`flic_labels`)."""
+    """FLIC as a :class:`flic_cli.methods.base.Method` (see :func:`flic_labels`).
+
+    ``backend = "scipy"`` runs :func:`flic_labels_scipy`, the paper's way (same labels, slower).
+    """
 
     threshold_m: float = 0.8
     min_size: int = 100
     maps: tuple = ()
     mc_mode: str = "map"
+    backend: str = "numba"
     main_param: ClassVar[str] = "threshold_m"
 
     def __post_init__(self) -> None:
         connection_sets(self.maps, self.mc_mode)  # validate early
+        if self.backend not in BACKENDS:
+            raise ValueError(f"backend must be one of {tuple(BACKENDS)}, got {self.backend!r}")
 
     def segment(
         self, image: RangeImage, points: np.ndarray, ground: np.ndarray | None
     ) -> np.ndarray:
         mask = image.ranges > 0 if ground is None else (image.ranges > 0) & ~ground
-        labels = flic_labels(
+        labels = BACKENDS[self.backend](
             image.ranges,
             image.elevation,
             self.threshold_m,
