@@ -12,8 +12,8 @@ from typer.testing import CliRunner
 from flic_cli.cli import app
 from flic_cli.config import load_config
 from flic_cli.errors import FlicInputError
+from flic_cli.runs.environment import THREAD_ENV_VARS
 from flic_cli.runs.evaluate import run_evaluate
-from flic_cli.runs.parallel import THREAD_ENV
 from flic_cli.runs.sweep import DEFAULT_RANGES, SWEEP_COLUMNS, sweep_values
 
 runner = CliRunner()
@@ -21,7 +21,7 @@ runner = CliRunner()
 
 @pytest.fixture(autouse=True)
 def _restore_thread_env(monkeypatch: pytest.MonkeyPatch) -> None:
-    for name in THREAD_ENV:
+    for name in THREAD_ENV_VARS:
         monkeypatch.setenv(name, "1")
 
 
