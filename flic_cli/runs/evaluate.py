@@ -214,11 +214,19 @@ def _evaluate_frame(
     for setting in settings:
         prep = prepare(frame, setting, cfg.get("projection", {}))
         assert prep.labels is not None  # load_labelled_frame guarantees labels
+        # The ground mask depends only on the remover: extract it once per remover, and count
+        # its time in every method that uses it (as if each method ran alone).
+        grounds: dict[str | None, tuple[Any, float]] = {}
         for name in methods:
             segmenter = make_segmenter(cfg, name, setting, ground_remover)
+            if segmenter.ground not in grounds:
+                start = time.perf_counter()
+                mask = segmenter.extract_ground(prep.image)
+                grounds[segmenter.ground] = (mask, time.perf_counter() - start)
+            ground, ground_seconds = grounds[segmenter.ground]
             start = time.perf_counter()
-            labels, _ = segmenter(prep.image, prep.points)
-            seconds = time.perf_counter() - start
+            labels = segmenter.method.segment(prep.image, prep.points, ground)
+            seconds = time.perf_counter() - start + ground_seconds
             matches = match_objects(prep.labels, labels, prep.points)
             stats = segmentation_stats(prep.labels, labels)
             n = len(matches)
@@ -335,7 +343,8 @@ def _read_parts(
 # ---------------------------------------------------------------------------------------------
 
 
-def _percent(value: float) -> float:
+def percent(value: float) -> float:
+    """A fraction as a percentage with 2 decimals (nan stays nan)."""
     return float(np.round(100.0 * value, 2)) if np.isfinite(value) else float("nan")
 
 
@@ -343,7 +352,7 @@ def _scores(ious: np.ndarray) -> dict[str, Any]:
     """:func:`summarize` in percent with two decimals (``objects`` unchanged)."""
     s = summarize(ious)
     out: dict[str, Any] = {"objects": int(s["objects"])}
-    out.update({c: _percent(float(s[c])) for c in SCORE_COLUMNS})
+    out.update({c: percent(float(s[c])) for c in SCORE_COLUMNS})
     return out
 
 

@@ -21,7 +21,7 @@ from flic_cli.errors import FlicInputError
 from flic_cli.io.atomic import atomic_write
 from flic_cli.io.base import FrameRef
 from flic_cli.metrics import match_objects, summarize
-from flic_cli.runs.evaluate import load_labelled_frame, select_labelled
+from flic_cli.runs.evaluate import load_labelled_frame, percent, select_labelled
 from flic_cli.runs.parallel import imap_frames
 from flic_cli.runs.pipeline import SETTINGS, Segmenter, make_segmenter, prepare
 
@@ -240,7 +240,7 @@ def run_sweep(
             {
                 "param": param,
                 "value": float(value),
-                **{c: _percent(s[c]) for c in SWEEP_COLUMNS[2:-1]},
+                **{c: percent(s[c]) for c in SWEEP_COLUMNS[2:-1]},
                 "objects": int(s["objects"]),
             }
         )
@@ -273,8 +273,3 @@ def run_sweep(
         csv_path,
         png_path,
     )
-
-
-def _percent(value: float) -> float:
-    value = float(value)
-    return float(np.round(100.0 * value, 2)) if np.isfinite(value) else float("nan")
