@@ -54,3 +54,19 @@ def small_sample(tmp_path_factory: pytest.TempPathFactory):
     from flic_cli.sample import write_sample
 
     return write_sample(tmp_path_factory.mktemp("sample"), frames=3)
+
+
+@pytest.fixture(scope="session")
+def sample_root(small_sample) -> Path:
+    """The SemanticKITTI root of the 3-frame synthetic sample."""
+    return small_sample.kitti_root
+
+
+@pytest.fixture(autouse=True)
+def _pin_thread_env(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Worker code run in this process (dask with processes=False) sets the thread-pool
+    variables; pin them per test so that no test leaks them into the next."""
+    from flic_cli.runs.environment import THREAD_ENV_VARS
+
+    for name in THREAD_ENV_VARS:
+        monkeypatch.setenv(name, "1")

@@ -12,7 +12,6 @@ from typer.testing import CliRunner
 
 from flic_cli.cli import app
 from flic_cli.runs.benchmark import HIST_EDGES_MS, STAGES
-from flic_cli.runs.environment import THREAD_ENV_VARS
 
 runner = CliRunner()
 METHODS = ["flic0", "flic1", "bogoslavskyi", "dbscan"]
@@ -38,13 +37,6 @@ ENV_KEYS = {
     "repeat",
     "format",
 }
-
-
-@pytest.fixture(autouse=True)
-def _restore_thread_env(monkeypatch: pytest.MonkeyPatch) -> None:
-    """The command sets the thread variables of the process: restore them after each test."""
-    for name in THREAD_ENV_VARS:
-        monkeypatch.setenv(name, "1")
 
 
 def _bench(data: Path, out: Path, *extra: str):

@@ -15,7 +15,6 @@ from typer.testing import CliRunner
 from flic_cli.cli import app
 from flic_cli.errors import FlicInputError
 from flic_cli.metrics import IOU_THRESHOLDS
-from flic_cli.runs.environment import THREAD_ENV_VARS
 from flic_cli.runs.evaluate import (
     FRAME_COLUMNS,
     OBJECT_COLUMNS,
@@ -37,21 +36,6 @@ TABLES = [
 ]
 #: Columns that hold wall-clock times, which differ between any two runs.
 TIMING = ["seconds", "ms_per_frame_median"]
-
-
-@pytest.fixture(autouse=True)
-def _restore_thread_env(monkeypatch: pytest.MonkeyPatch) -> None:
-    """Workers in this process (dask with processes=False) set the thread variables: restore."""
-    for name in THREAD_ENV_VARS:
-        monkeypatch.setenv(name, "1")
-
-
-@pytest.fixture(scope="session")
-def sample_root(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    """A 3-frame labelled SemanticKITTI sequence (synthetic sample)."""
-    from flic_cli.sample import write_sample
-
-    return write_sample(tmp_path_factory.mktemp("sample"), frames=3).kitti_root
 
 
 def _evaluate(data: Path, out: Path, *extra: str):

@@ -12,24 +12,10 @@ from typer.testing import CliRunner
 from flic_cli.cli import app
 from flic_cli.config import load_config
 from flic_cli.errors import FlicInputError
-from flic_cli.runs.environment import THREAD_ENV_VARS
 from flic_cli.runs.evaluate import run_evaluate
 from flic_cli.runs.sweep import DEFAULT_RANGES, SWEEP_COLUMNS, sweep_values
 
 runner = CliRunner()
-
-
-@pytest.fixture(autouse=True)
-def _restore_thread_env(monkeypatch: pytest.MonkeyPatch) -> None:
-    for name in THREAD_ENV_VARS:
-        monkeypatch.setenv(name, "1")
-
-
-@pytest.fixture(scope="module")
-def sample_root(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    from flic_cli.sample import write_sample
-
-    return write_sample(tmp_path_factory.mktemp("sample"), frames=3).kitti_root
 
 
 def _sweep(data: Path, out: Path, *extra: str):
