@@ -49,10 +49,6 @@ def load_config(path: Path | None = None) -> dict[str, Any]:
     return _merge(cfg, over)
 
 
-def method_names(cfg: dict[str, Any]) -> list[str]:
-    return list(cfg.get("methods", {}))
-
-
 def build_method(cfg: dict[str, Any], name: str, **override: Any) -> Any:
     """The method variant ``[methods.NAME]`` of the config, with keyword overrides.
 

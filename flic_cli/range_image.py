@@ -51,11 +51,6 @@ class RangeImage:
         return self.ranges.shape  # type: ignore[return-value]
 
     @property
-    def h_step(self) -> float:
-        """Horizontal angle between adjacent columns in radians (``2 pi / W``)."""
-        return 2.0 * np.pi / self.ranges.shape[1]
-
-    @property
     def azimuth(self) -> np.ndarray:
         """(W,) azimuth of each column's centre in radians (+pi at column 0, decreasing)."""
         w = self.ranges.shape[1]
@@ -162,11 +157,10 @@ def _row_elevation(elev_pts: np.ndarray, rows: np.ndarray, n_rows: int) -> np.nd
     ``rows`` must be non-decreasing (ring indices in scan order).
     """
     bounds = np.searchsorted(rows, np.arange(n_rows + 1))
-    sorted_el = elev_pts
     out = np.full(n_rows, np.nan)
     for r in range(n_rows):
         if bounds[r + 1] > bounds[r]:
-            out[r] = np.median(sorted_el[bounds[r] : bounds[r + 1]])
+            out[r] = np.median(elev_pts[bounds[r] : bounds[r + 1]])
     ok = np.isfinite(out)
     if not ok.any():
         return np.linspace(np.radians(3.0), np.radians(-25.0), n_rows)

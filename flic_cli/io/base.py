@@ -4,11 +4,14 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Protocol
+from typing import Protocol, TypeVar
 
 import numpy as np
 
+from flic_cli.errors import FlicInputError
 from flic_cli.range_image import RangeImage
+
+T = TypeVar("T")
 
 
 @dataclass(frozen=True)
@@ -65,3 +68,21 @@ class Dataset(Protocol):
     def load(self, ref: FrameRef) -> Frame:
         """Read one frame; raises :class:`flic_cli.errors.FlicInputError` on bad input."""
         ...
+
+
+def select_sequences(root: Path, found: dict[str, T], sequences: list[str] | None) -> dict[str, T]:
+    """The requested entries of ``found`` (sequence name -> anything), sorted; all when None.
+
+    Raises
+    ------
+    FlicInputError
+        Naming the requested sequences that ``root`` does not have.
+    """
+    if sequences is None:
+        return found
+    unknown = [s for s in sequences if s not in found]
+    if unknown:
+        raise FlicInputError(
+            root, f"no sequence {', '.join(unknown)} (found: {', '.join(found) or 'none'})"
+        )
+    return {s: found[s] for s in sorted(set(sequences))}

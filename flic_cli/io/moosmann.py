@@ -17,7 +17,7 @@ from PIL import Image, UnidentifiedImageError
 
 from flic_cli.errors import FlicInputError
 from flic_cli.io.atomic import atomic_write, atomic_write_bytes, read_bytes, read_text
-from flic_cli.io.base import Frame, FrameRef
+from flic_cli.io.base import Frame, FrameRef, select_sequences
 from flic_cli.io.semantickitti import frames_text, in_frames
 from flic_cli.range_image import from_sensor_image
 
@@ -253,13 +253,7 @@ class MoosmannDataset:
             logs = {d.name: lay for d in candidates if (lay := _log_layout(d)) is not None}
         if not logs:
             raise FlicInputError(self.root, "holds no Moosmann log (img.cfg + scan*.png)")
-        if sequences is not None:
-            unknown = [s for s in sequences if s not in logs]
-            if unknown:
-                raise FlicInputError(
-                    self.root, f"no sequence {', '.join(unknown)} (found: {', '.join(logs)})"
-                )
-            logs = {s: logs[s] for s in sorted(set(sequences))}
+        logs = select_sequences(self.root, logs, sequences)
         self._cfg: dict[str, ImgCfg] = {}
         self._refs: list[FrameRef] = []
         for name, (scans, cfg_path) in logs.items():

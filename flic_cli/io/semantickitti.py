@@ -16,7 +16,7 @@ import numpy as np
 
 from flic_cli.errors import FlicInputError
 from flic_cli.io.atomic import atomic_write_bytes, read_bytes, read_text
-from flic_cli.io.base import Frame, FrameRef
+from flic_cli.io.base import Frame, FrameRef, select_sequences
 
 FORMAT = "semantickitti"
 
@@ -379,15 +379,8 @@ class SemanticKittiDataset:
         found = _sequence_dirs(self.root)
         if not found:
             raise FlicInputError(self.root, "has no sequences/<NN>/velodyne/ folders")
-        if sequences is not None:
-            unknown = [s for s in sequences if s not in found]
-            if unknown:
-                raise FlicInputError(
-                    self.root,
-                    f"no sequence {', '.join(unknown)} (found: {', '.join(found) or 'none'})",
-                )
-            found = {s: found[s] for s in sorted(set(sequences))}
-        elif require_labels:
+        found = select_sequences(self.root, found, sequences)
+        if sequences is None and require_labels:
             # A whole dataset: leave out the sequences without labels (SemanticKITTI's test split).
             unlabelled = [s for s, d in found.items() if not (d / "labels").is_dir()]
             if unlabelled and len(unlabelled) < len(found):
