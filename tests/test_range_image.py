@@ -18,7 +18,7 @@ def naive_rows(points: np.ndarray) -> int:
 def test_ring_recovery_gives_64_rows_on_every_shared_frame(kitti_root):
     ds = open_dataset(kitti_root)
     refs = ds.refs()
-    assert len(refs) == 22
+    assert len(refs) == len(list(kitti_root.glob("sequences/*/velodyne/*.bin"))) >= 50
     naive = []
     for ref in refs:
         frame = ds.load(ref)
