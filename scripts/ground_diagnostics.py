@@ -18,10 +18,11 @@ import numpy as np
 import pandas as pd
 from tqdm import tqdm
 
+from flic_cli.classes import GROUND_CLASSES, THING_CLASSES
 from flic_cli.config import load_config
 from flic_cli.io import open_dataset
 from flic_cli.io.atomic import atomic_write
-from flic_cli.metrics import GROUND_CLASSES, THING_CLASSES, match_objects
+from flic_cli.metrics import match_objects
 from flic_cli.runs.pipeline import make_segmenter, prepare
 
 

@@ -10,14 +10,11 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from flic_cli.classes import CLASS_NAMES, GROUND_CLASSES, THING_CLASSES, ground_mask, thing_mask
 from flic_cli.metrics import (
-    CLASS_NAMES,
-    GROUND_CLASSES,
     IOU_THRESHOLDS,
-    THING_CLASSES,
     ObjectMatches,
     distance_band,
-    ground_mask,
     match_objects,
     segmentation_stats,
     summarize,
@@ -47,7 +44,8 @@ def test_constants() -> None:
     assert set(range(252, 260)) <= set(THING_CLASSES)
     assert GROUND_CLASSES == (40, 44, 48, 49, 60, 72)
     assert CLASS_NAMES[10] == "car" and CLASS_NAMES[259] == "moving-other-vehicle"
-    assert set(CLASS_NAMES) == set(THING_CLASSES) | set(GROUND_CLASSES)
+    assert set(CLASS_NAMES) > set(THING_CLASSES) | set(GROUND_CLASSES)
+    assert len(CLASS_NAMES) == 34  # every raw class of semantic-kitti.yaml
     assert IOU_THRESHOLDS == (0.5, 0.55, 0.6, 0.65, 0.7, 0.75, 0.8, 0.85, 0.9, 0.95)
 
 
@@ -57,6 +55,10 @@ def test_ground_mask_uses_semantic_bits_only() -> None:
     )
     np.testing.assert_array_equal(
         ground_mask(labels), [True, True, True, False, False, False, True]
+    )
+    # objects: thing class *and* an instance id
+    np.testing.assert_array_equal(
+        thing_mask(labels), [False, False, False, True, False, False, False]
     )
 
 

@@ -6,7 +6,7 @@ Every remover is a function ``(RangeImage, **params) -> (H, W) bool`` (True = gr
 - :func:`bogoslavskyi_ground` -- Bogoslavskyi & Stachniss' angle image, Savitzky-Golay smoothing
   and breadth-first growth from the lowest row;
 - "No Ground" setting: points of the ground classes are removed by label before projection
-  (:func:`flic_cli.metrics.ground_mask`), so no remover runs.
+  (:func:`flic_cli.classes.ground_mask`), so no remover runs.
 """
 
 from flic_cli.ground.bogoslavskyi import bogoslavskyi_ground

@@ -40,11 +40,11 @@ import numpy as np
 import pandas as pd
 from tqdm import tqdm
 
+from flic_cli.classes import CLASS_NAMES, class_name
 from flic_cli.errors import FlicInputError
 from flic_cli.io import atomic_write, open_dataset, read_scan
 from flic_cli.io.base import Frame, FrameRef
 from flic_cli.metrics import (
-    CLASS_NAMES,
     DISTANCE_BANDS,
     IOU_THRESHOLDS,
     distance_band,
@@ -236,7 +236,7 @@ def _evaluate_frame(
             objects["frame"] += [ref.frame] * n
             objects["instance"] += matches.instance.tolist()
             objects["class"] += matches.semantic.tolist()
-            objects["class_name"] += [CLASS_NAMES.get(int(c), str(c)) for c in matches.semantic]
+            objects["class_name"] += [class_name(c) for c in matches.semantic]
             objects["points"] += matches.n_points.tolist()
             objects["distance_m"] += np.round(matches.distance, 3).tolist()
             objects["band"] += distance_band(matches.distance).tolist()

@@ -13,10 +13,10 @@ from typing import Any
 
 import numpy as np
 
+from flic_cli.classes import ground_mask
 from flic_cli.config import build_method, method_ground
 from flic_cli.errors import FlicInputError
 from flic_cli.io.base import Frame, FrameRef
-from flic_cli.metrics import ground_mask
 from flic_cli.range_image import RangeImage, project_points
 
 SETTINGS = ("ground", "no-ground")

@@ -1,4 +1,4 @@
-"""Evaluation protocol of the FLIC paper (SPEC section 4, paper section 4.B).
+"""Instance scores of the FLIC paper (SPEC section 4, paper section 4.B): IoU, P_x, fragments.
 
 Everything here is a plain function over numpy arrays of one frame (or, for :func:`summarize`,
 of the pooled objects of many frames); nothing keeps state between calls.
@@ -10,14 +10,14 @@ Conventions
 - Predictions are integer cluster ids per point; ``0`` (and, leniently, any negative value such as
   DBSCAN's ``-1``) means *unclustered*: such a point belongs to no cluster.
 - The arrays passed in are the *evaluated point set*: in the "No Ground" setting the caller drops
-  the ground points (see :func:`ground_mask`) before calling; cluster sizes are counted over
-  exactly the points passed in.
+  the ground points (see :func:`flic_cli.classes.ground_mask`) before calling; cluster sizes are
+  counted over exactly the points passed in.
 
 Object matching (:func:`match_objects`)
 ---------------------------------------
-1. A ground-truth object is one full label value whose semantic class is in :data:`THING_CLASSES`
-   and whose instance id is non-zero, i.e. one ``(semantic, instance)`` pair. Objects with fewer
-   than ``min_points`` points are ignored (not counted at all).
+1. A ground-truth object is one full label value whose semantic class is a thing class
+   (:data:`flic_cli.classes.THING_CLASSES`) and whose instance id is non-zero, i.e. one
+   ``(semantic, instance)`` pair. Objects with fewer than ``min_points`` points are ignored.
 2. Each object takes the predicted cluster with the largest overlap (number of shared points).
    Ties between clusters: the smaller cluster (the higher IoU) wins, then the lower cluster id.
 3. ``IoU = |A & B| / |A | B| = overlap / (n_points + cluster_size - overlap)``, with the cluster
@@ -43,58 +43,19 @@ from typing import NamedTuple
 
 import numpy as np
 
+from flic_cli.classes import thing_mask as _thing_mask
+
 __all__ = [
-    "CLASS_NAMES",
     "DISTANCE_BANDS",
-    "GROUND_CLASSES",
     "IOU_THRESHOLDS",
     "MIN_FRAGMENT_POINTS",
     "MIN_OBJECT_POINTS",
-    "THING_CLASSES",
     "ObjectMatches",
     "distance_band",
-    "ground_mask",
     "match_objects",
     "segmentation_stats",
     "summarize",
 ]
-
-#: SemanticKITTI classes that carry instance ids (static and moving variants).
-THING_CLASSES: tuple[int, ...] = (
-    10, 11, 13, 15, 16, 18, 20, 30, 31, 32,
-    252, 253, 254, 255, 256, 257, 258, 259,
-)  # fmt: skip
-
-#: Ground classes, removed by label in the paper's "No Ground" setting.
-GROUND_CLASSES: tuple[int, ...] = (40, 44, 48, 49, 60, 72)
-
-#: SemanticKITTI names of the thing and ground classes.
-CLASS_NAMES: dict[int, str] = {
-    10: "car",
-    11: "bicycle",
-    13: "bus",
-    15: "motorcycle",
-    16: "on-rails",
-    18: "truck",
-    20: "other-vehicle",
-    30: "person",
-    31: "bicyclist",
-    32: "motorcyclist",
-    40: "road",
-    44: "parking",
-    48: "sidewalk",
-    49: "other-ground",
-    60: "lane-marking",
-    72: "terrain",
-    252: "moving-car",
-    253: "moving-bicyclist",
-    254: "moving-person",
-    255: "moving-motorcyclist",
-    256: "moving-on-rails",
-    257: "moving-bus",
-    258: "moving-truck",
-    259: "moving-other-vehicle",
-}
 
 #: IoU thresholds x of P_x: 0.50, 0.55, ..., 0.95 (exact two-decimal values).
 IOU_THRESHOLDS: tuple[float, ...] = tuple(
@@ -112,35 +73,6 @@ MIN_FRAGMENT_POINTS: int = 10
 DISTANCE_BANDS: tuple[str, ...] = ("0-20", "20-40", ">40")
 
 _IOU_SLACK = 1e-12
-
-
-def _class_lut(classes: tuple[int, ...]) -> np.ndarray:
-    """Read-only boolean lookup table over all 16-bit semantic ids."""
-    lut = np.zeros(1 << 16, dtype=bool)
-    lut[list(classes)] = True
-    lut.setflags(write=False)
-    return lut
-
-
-_THING_LUT = _class_lut(THING_CLASSES)
-_GROUND_LUT = _class_lut(GROUND_CLASSES)
-
-
-def ground_mask(labels: np.ndarray) -> np.ndarray:
-    """Points whose ground-truth semantic class is a ground class.
-
-    Parameters
-    ----------
-    labels : numpy.ndarray
-        ``(N,)`` SemanticKITTI labels (``uint32``; semantic class in the lower 16 bits).
-
-    Returns
-    -------
-    numpy.ndarray
-        ``(N,)`` bool, true where the semantic class is in :data:`GROUND_CLASSES`.
-    """
-    labels = _as_labels(labels)
-    return _GROUND_LUT[labels & 0xFFFF]
 
 
 @dataclass(frozen=True)
@@ -265,7 +197,7 @@ def _contingency(gt_labels: np.ndarray, pred: np.ndarray, min_points: int) -> _C
     point_cluster = np.full(n, -1, dtype=np.int64)
     point_cluster[clustered] = cluster_inv
 
-    thing_mask = _THING_LUT[gt & 0xFFFF] & (gt > 0xFFFF)
+    thing_mask = _thing_mask(gt)
     thing_labels = gt[thing_mask]
     all_labels, label_inv, label_counts = np.unique(
         thing_labels, return_inverse=True, return_counts=True
