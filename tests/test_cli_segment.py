@@ -150,3 +150,27 @@ def test_empty_moosmann_frame_is_segmented_to_nothing(small_sample, tmp_path):
     result = _segment(log, "--out", tmp_path / "out")
     assert result.exit_code == 0, result.output
     assert read_predictions(tmp_path / "out", "log", 1).size == 0
+
+
+@pytest.mark.parametrize("setting", ["ground", "no-ground"])
+def test_predictions_hold_one_label_per_stored_point_with_nan_points(
+    small_sample, tmp_path, setting
+):
+    """Points with NaN/inf coordinates are dropped for segmenting, but the prediction still has
+    one label per point of the .bin (SemanticKITTI's rule); the dropped points get 0."""
+    from flic_cli.io import read_bin, read_label, write_bin, write_label
+
+    seq = tmp_path / "data" / "sequences" / "00"
+    src = small_sample.kitti_root / "sequences" / "00"
+    raw = read_bin(src / "velodyne" / "000000.bin")
+    bad = np.arange(0, raw.shape[0], 97)
+    raw[bad, 0] = np.nan
+    raw[bad[::2], 2] = np.inf
+    write_bin(seq / "velodyne" / "000000.bin", raw)
+    write_label(seq / "labels" / "000000.label", read_label(src / "labels" / "000000.label"))
+    with pytest.warns(UserWarning, match="NaN or infinite"):
+        result = _segment(tmp_path / "data", "--setting", setting, "--out", tmp_path / "out")
+    assert result.exit_code == 0, result.output
+    pred = read_predictions(tmp_path / "out", "00", 0, n_points=raw.shape[0])
+    assert pred.shape == (raw.shape[0],)
+    assert np.all(pred[bad] == 0) and pred.max() > 0

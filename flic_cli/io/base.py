@@ -47,12 +47,20 @@ class Frame:
     image : the sensor's own range image when the format is one (Moosmann), else None (the
         points are projected by :func:`flic_cli.range_image.project_points`). When set,
         ``points[i]`` is the point of pixel ``image.point_pixel[i]``.
+    finite : (N_read,) bool over the points as stored, True for those in ``points`` (points with
+        NaN or infinite coordinates are dropped when read); None when all were kept.
     """
 
     ref: FrameRef
     points: np.ndarray
     labels: np.ndarray | None
     image: RangeImage | None = None
+    finite: np.ndarray | None = None
+
+    @property
+    def n_read(self) -> int:
+        """Number of points as stored in the file (outputs hold one value per such point)."""
+        return self.points.shape[0] if self.finite is None else int(self.finite.shape[0])
 
 
 class Dataset(Protocol):

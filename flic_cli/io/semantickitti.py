@@ -29,11 +29,14 @@ class Scan(NamedTuple):
     points : (N, 3) float32, metres, sensor frame, scan order; only points with finite coordinates
     remission : (N,) float32, 0..1
     labels : (N,) uint32 SemanticKITTI encoding, or None when no label file was given
+    finite : (N_read,) bool over the points as stored in the file, True for those kept in
+        ``points``; None when every point was finite (then N_read = N)
     """
 
     points: np.ndarray
     remission: np.ndarray
     labels: np.ndarray | None
+    finite: np.ndarray | None = None
 
 
 # ---------------------------------------------------------------------------------------------
@@ -100,7 +103,8 @@ def read_scan(bin_path: str | Path, label_path: str | Path | None = None) -> Sca
     """Read and validate a scan and, optionally, its labels.
 
     Points with a NaN or infinite coordinate are dropped, from the labels too, with a warning
-    that counts them.
+    that counts them; ``Scan.finite`` says which points of the file were kept, so that outputs
+    can still hold one value per point of the file.
 
     Parameters
     ----------
@@ -131,7 +135,12 @@ def read_scan(bin_path: str | Path, label_path: str | Path | None = None) -> Sca
         )
         raw = raw[keep]
         labels = None if labels is None else labels[keep]
-    return Scan(np.ascontiguousarray(raw[:, :3]), np.ascontiguousarray(raw[:, 3]), labels)
+    return Scan(
+        np.ascontiguousarray(raw[:, :3]),
+        np.ascontiguousarray(raw[:, 3]),
+        labels,
+        None if n_bad == 0 else keep,
+    )
 
 
 def semantic(labels: np.ndarray) -> np.ndarray:
@@ -426,4 +435,4 @@ class SemanticKittiDataset:
     def load(self, ref: FrameRef) -> Frame:
         """Read one frame (points with non-finite coordinates dropped, with a warning)."""
         scan = read_scan(ref.path, ref.label_path)
-        return Frame(ref, scan.points, scan.labels)
+        return Frame(ref, scan.points, scan.labels, finite=scan.finite)

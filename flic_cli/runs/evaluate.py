@@ -165,7 +165,7 @@ def load_labelled_frame(ref: FrameRef) -> Frame:
             "(labels/<frame>.label)",
         )
     scan = read_scan(ref.path, ref.label_path)
-    return Frame(ref, scan.points, scan.labels)
+    return Frame(ref, scan.points, scan.labels, finite=scan.finite)
 
 
 def evaluate_frame(

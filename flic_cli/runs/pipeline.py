@@ -32,8 +32,9 @@ class Prepared:
     image : range image of the evaluated point set
     points : (N, 3) float32, the evaluated point set
     labels : (N,) uint32 ground-truth labels of the evaluated points, or None
-    keep : (N_scan,) bool, which points of the scan are evaluated (None = all)
-    n_scan : number of points of the scan as read
+    keep : (N_scan,) bool, which points of the scan as stored in its file are evaluated (None =
+        all): not those with non-finite coordinates, nor, in the no-ground setting, ground points
+    n_scan : number of points of the scan as stored in its file
     """
 
     ref: FrameRef
@@ -94,7 +95,18 @@ def prepare(frame: Frame, setting: str, projection: dict[str, Any]) -> Prepared:
         )
     if keep is not None:
         points, labels = points[keep], labels[keep]
-    return Prepared(frame.ref, image, points, labels, keep, frame.points.shape[0])
+    return Prepared(frame.ref, image, points, labels, _in_file(frame.finite, keep), frame.n_read)
+
+
+def _in_file(finite: np.ndarray | None, keep: np.ndarray | None) -> np.ndarray | None:
+    """``keep`` (over the finite points) as a mask over every point of the file."""
+    if finite is None:
+        return keep
+    if keep is None:
+        return finite
+    out = finite.copy()
+    out[np.flatnonzero(finite)[~keep]] = False
+    return out
 
 
 @dataclass(frozen=True)
