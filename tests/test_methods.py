@@ -229,5 +229,7 @@ def test_unknown_backend_is_refused():
     from flic_cli.config import build_method, load_config
     from flic_cli.errors import FlicInputError
 
-    with pytest.raises(FlicInputError, match="backend must be one of"):
+    with pytest.raises(
+        FlicInputError, match=r"\[methods.flic0\] backend: Input should be 'numba' or 'scipy'"
+    ):
         build_method(load_config(), "flic0", backend="cuda")

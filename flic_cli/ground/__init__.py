@@ -1,17 +1,30 @@
 """Ground extraction: the step between the range image and the clusterer.
 
-Every remover is a function ``(RangeImage, **params) -> (H, W) bool`` (True = ground pixel):
+Every remover is a component (:mod:`flic_cli.config.component`) called as ``remover(image) ->
+(H, W) bool`` (True = ground pixel), see :class:`flic_cli.ground.base.GroundRemover`:
 
-- :func:`paper_ground` -- the FLIC paper's tan(beta) test with the height image (SPEC section 3);
-- :func:`bogoslavskyi_ground` -- Bogoslavskyi & Stachniss' angle image, Savitzky-Golay smoothing
-  and breadth-first growth from the lowest row;
-- "No Ground" setting: points of the ground classes are removed by label before projection
+- ``paper`` -- :class:`PaperGround`, the FLIC paper's tan(beta) test with the height image;
+- ``bogoslavskyi`` -- :class:`BogoslavskyiGround`, Bogoslavskyi & Stachniss' angle image,
+  Savitzky-Golay smoothing and breadth-first growth from the lowest row;
+- the "No Ground" setting removes the ground classes' points by label before projection
   (:func:`flic_cli.classes.ground_mask`), so no remover runs.
+
+To add a remover: a component class with ``__call__(image)``, registered in :data:`REMOVERS`
+under the name that ``[ground.NAME]`` config tables and ``--ground-remover`` use.
 """
 
-from flic_cli.ground.bogoslavskyi import bogoslavskyi_ground
-from flic_cli.ground.paper import paper_ground
+from flic_cli.ground.base import GroundRemover
+from flic_cli.ground.bogoslavskyi import BogoslavskyiGround, bogoslavskyi_ground
+from flic_cli.ground.paper import PaperGround, paper_ground
 
-REMOVERS = {"paper": paper_ground, "bogoslavskyi": bogoslavskyi_ground}
+#: Ground removers by name.
+REMOVERS: dict[str, type] = {"paper": PaperGround, "bogoslavskyi": BogoslavskyiGround}
 
-__all__ = ["REMOVERS", "bogoslavskyi_ground", "paper_ground"]
+__all__ = [
+    "REMOVERS",
+    "BogoslavskyiGround",
+    "GroundRemover",
+    "PaperGround",
+    "bogoslavskyi_ground",
+    "paper_ground",
+]

@@ -2,10 +2,15 @@
 
 from __future__ import annotations
 
+from typing import Annotated, Literal
+
 import numpy as np
 from numba import njit
+from pydantic import Field
+from pydantic.dataclasses import dataclass
 from scipy.ndimage import correlate1d
 
+from flic_cli.config.component import STRICT
 from flic_cli.range_image import RangeImage
 
 # Savitzky-Golay smoothing kernels (quadratic fit) for the window sizes the original supports.
@@ -122,3 +127,23 @@ def bogoslavskyi_ground(
     return _grow_ground(
         image.ranges, smooth, float(np.radians(angle_deg)), float(np.radians(start_angle_deg))
     )
+
+
+@dataclass(frozen=True, config=STRICT)
+class BogoslavskyiGround:
+    """Bogoslavskyi & Stachniss' ground removal as a :class:`flic_cli.ground.base.GroundRemover`.
+
+    Attributes
+    ----------
+    angle_deg : largest angle difference between neighbouring ground cells, degrees.
+    window : Savitzky-Golay window, rows.
+    start_angle_deg : a column's lowest cell seeds the growth only below this angle, degrees.
+    """
+
+    angle_deg: Annotated[float, Field(gt=0, lt=90, description="degrees")] = 9.0
+    window: Literal[5, 7, 9, 11] = 5
+    start_angle_deg: Annotated[float, Field(gt=0, lt=90, description="degrees")] = 30.0
+
+    def __call__(self, image: RangeImage) -> np.ndarray:
+        """(H, W) bool ground mask of ``image`` (see :func:`bogoslavskyi_ground`)."""
+        return bogoslavskyi_ground(image, self.angle_deg, self.window, self.start_angle_deg)

@@ -2,9 +2,14 @@
 
 from __future__ import annotations
 
+from typing import Annotated
+
 import numpy as np
 from numba import njit
+from pydantic import Field
+from pydantic.dataclasses import dataclass
 
+from flic_cli.config.component import STRICT
 from flic_cli.range_image import RangeImage
 
 
@@ -109,3 +114,24 @@ def paper_ground(
         float(sensor_height_m),
         float(np.tan(np.radians(max_slope_deg if height_slope_deg is None else height_slope_deg))),
     )
+
+
+@dataclass(frozen=True, config=STRICT)
+class PaperGround:
+    """The paper's ground extraction as a :class:`flic_cli.ground.base.GroundRemover`.
+
+    Attributes
+    ----------
+    max_slope_deg : surfaces within +-this of horizontal are ground candidates, degrees.
+    height_slope_deg : slope of the height line from the wheel contact point, degrees (the paper:
+        the same 10 deg); horizontal surfaces below it, car roofs beyond ~10 m, count as ground.
+    sensor_height_m : sensor above the road, metres (KITTI and Moosmann: 1.73).
+    """
+
+    max_slope_deg: Annotated[float, Field(gt=0, lt=90, description="degrees")] = 10.0
+    height_slope_deg: Annotated[float, Field(ge=0, lt=90, description="degrees")] = 10.0
+    sensor_height_m: Annotated[float, Field(gt=0, description="metres")] = 1.73
+
+    def __call__(self, image: RangeImage) -> np.ndarray:
+        """(H, W) bool ground mask of ``image`` (see :func:`paper_ground`)."""
+        return paper_ground(image, self.max_slope_deg, self.sensor_height_m, self.height_slope_deg)

@@ -2,11 +2,13 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-from typing import ClassVar
+from typing import Annotated, ClassVar
 
 import numpy as np
+from pydantic import Field
+from pydantic.dataclasses import dataclass
 
+from flic_cli.config.component import STRICT
 from flic_cli.methods._unionfind import ANGLE, connect_labels
 from flic_cli.methods.flic import connection_sets
 from flic_cli.range_image import RangeImage
@@ -60,12 +62,18 @@ def bogoslavskyi_labels(
     )
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, config=STRICT)
 class Bogoslavskyi:
-    """Bogoslavskyi & Stachniss as a :class:`flic_cli.methods.base.Method`."""
+    """Bogoslavskyi & Stachniss as a :class:`flic_cli.methods.base.Method`.
 
-    angle_deg: float = 10.0
-    min_size: int = 100
+    Attributes
+    ----------
+    angle_deg : neighbours join when their angle beta exceeds this, degrees.
+    min_size : smallest cluster kept.
+    """
+
+    angle_deg: Annotated[float, Field(gt=0, lt=90, description="angle threshold, degrees")] = 10.0
+    min_size: Annotated[int, Field(ge=1, description="smallest cluster kept")] = 100
     main_param: ClassVar[str] = "angle_deg"
 
     def segment(

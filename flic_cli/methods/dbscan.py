@@ -2,11 +2,13 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-from typing import ClassVar
+from typing import Annotated, ClassVar
 
 import numpy as np
+from pydantic import Field
+from pydantic.dataclasses import dataclass
 
+from flic_cli.config.component import STRICT
 from flic_cli.methods.base import drop_small
 from flic_cli.range_image import RangeImage
 
@@ -35,13 +37,20 @@ def dbscan_labels(
     return drop_small(raw + 1, min_size)
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, config=STRICT)
 class Dbscan:
-    """DBSCAN as a :class:`flic_cli.methods.base.Method`; ground pixels' points are left out."""
+    """DBSCAN as a :class:`flic_cli.methods.base.Method`; ground pixels' points are left out.
 
-    eps_m: float = 0.5
-    min_samples: int = 5
-    min_size: int = 100
+    Attributes
+    ----------
+    eps_m : neighbourhood radius, metres.
+    min_samples : points in the radius (the point itself included) that make a core point.
+    min_size : smallest cluster kept, points.
+    """
+
+    eps_m: Annotated[float, Field(gt=0, description="neighbourhood radius, metres")] = 0.5
+    min_samples: Annotated[int, Field(ge=1, description="points that make a core point")] = 5
+    min_size: Annotated[int, Field(ge=1, description="smallest cluster kept, points")] = 100
     main_param: ClassVar[str] = "eps_m"
 
     def segment(

@@ -2,11 +2,13 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-from typing import ClassVar
+from typing import Annotated, ClassVar, Literal
 
 import numpy as np
+from pydantic import Field, PositiveInt, field_validator
+from pydantic.dataclasses import dataclass
 
+from flic_cli.config.component import STRICT
 from flic_cli.methods._unionfind import DISTANCE, connect_labels
 from flic_cli.range_image import RangeImage
 
@@ -188,24 +190,39 @@ def flic_labels(
 BACKENDS = {"numba": flic_labels, "scipy": flic_labels_scipy}
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, config=STRICT)
 class Flic:
     """FLIC as a :class:`flic_cli.methods.base.Method` (see :func:`flic_labels`).
 
-    ``backend = "scipy"`` runs :func:`flic_labels_scipy`, the paper's way (same labels, slower).
+    Attributes
+    ----------
+    threshold_m : distance threshold t, metres.
+    min_size : smallest cluster kept.
+    maps : Map Connections, ``[row_step, col_step]`` or ``[row_step, col_step, row_offset,
+        col_offset]`` each (see :func:`connection_sets`).
+    mc_mode : ``"map"`` (an MC is the sub-image of every step-th row and column) or
+        ``"neighbour"`` (every measurement to its step-th neighbour).
+    backend : ``"numba"`` (the union-find kernel) or ``"scipy"`` (:func:`flic_labels_scipy`,
+        the paper's way: same labels, slower).
     """
 
-    threshold_m: float = 0.8
-    min_size: int = 100
-    maps: tuple = ()
-    mc_mode: str = "map"
-    backend: str = "numba"
+    threshold_m: Annotated[float, Field(gt=0, description="distance threshold t, metres")] = 0.8
+    min_size: Annotated[int, Field(ge=1, description="smallest cluster kept")] = 100
+    maps: tuple[tuple[PositiveInt, ...], ...] = ()
+    mc_mode: Literal["map", "neighbour"] = "map"
+    backend: Literal["numba", "scipy"] = "numba"
     main_param: ClassVar[str] = "threshold_m"
 
-    def __post_init__(self) -> None:
-        connection_sets(self.maps, self.mc_mode)  # validate early
-        if self.backend not in BACKENDS:
-            raise ValueError(f"backend must be one of {tuple(BACKENDS)}, got {self.backend!r}")
+    @field_validator("maps")
+    @classmethod
+    def _check_maps(cls, maps: tuple[tuple[int, ...], ...]) -> tuple[tuple[int, ...], ...]:
+        for m in maps:
+            if len(m) not in (2, 4):
+                raise ValueError(
+                    "a map is [row_step, col_step] or [row_step, col_step, row_offset, "
+                    f"col_offset], got {list(m)}"
+                )
+        return maps
 
     def segment(
         self, image: RangeImage, points: np.ndarray, ground: np.ndarray | None

@@ -418,7 +418,8 @@ def run_benchmark(
         setting=setting,
         ground_remover=ground_remover,
         methods={
-            m: {"kind": cfg["methods"][m].get("kind"), "ground": segs[m].ground} for m in methods
+            m: {"kind": cfg["methods"][m].get("kind"), "ground": segs[m].ground_name}
+            for m in methods
         },
         frames_selected=len(refs),
         frames_timed=timed_frames,

@@ -219,11 +219,11 @@ def _evaluate_frame(
         grounds: dict[str | None, tuple[Any, float]] = {}
         for name in methods:
             segmenter = make_segmenter(cfg, name, setting, ground_remover)
-            if segmenter.ground not in grounds:
+            if segmenter.ground_name not in grounds:
                 start = time.perf_counter()
                 mask = segmenter.extract_ground(prep.image)
-                grounds[segmenter.ground] = (mask, time.perf_counter() - start)
-            ground, ground_seconds = grounds[segmenter.ground]
+                grounds[segmenter.ground_name] = (mask, time.perf_counter() - start)
+            ground, ground_seconds = grounds[segmenter.ground_name]
             start = time.perf_counter()
             labels = segmenter.method.segment(prep.image, prep.points, ground)
             seconds = time.perf_counter() - start + ground_seconds

@@ -117,21 +117,18 @@ class Segmenter:
     ----------
     name : the method variant's name in the config (e.g. ``"flic14"``)
     method : the clusterer (see :mod:`flic_cli.methods`)
-    ground : ``"paper"``, ``"bogoslavskyi"`` or None (no ground extraction: "No Ground" setting)
-    ground_params : keyword arguments of the ground remover
+    ground_name : the remover's name (``"paper"``, ...), None in the "No Ground" setting
+    remover : the ground remover (see :mod:`flic_cli.ground`), None in the "No Ground" setting
     """
 
     name: str
     method: Any
-    ground: str | None
-    ground_params: dict
+    ground_name: str | None
+    remover: Any
 
     def extract_ground(self, image: RangeImage) -> np.ndarray | None:
-        if self.ground is None:
-            return None
-        from flic_cli.ground import REMOVERS
-
-        return REMOVERS[self.ground](image, **self.ground_params)
+        """The remover's (H, W) ground mask, or None when there is no remover."""
+        return None if self.remover is None else self.remover(image)
 
     def __call__(self, image: RangeImage, points: np.ndarray) -> tuple[np.ndarray, Any]:
         """Per-point labels (0 = none) and the ground mask used (or None)."""
@@ -158,16 +155,23 @@ def make_segmenter(
         protocol), ``"own"`` (each method its own ``ground`` key: Bogoslavskyi uses theirs) or a
         remover's name.
     """
+    from flic_cli.config.component import describe
+    from flic_cli.ground import REMOVERS
+
     method = build_method(cfg, name)
     if setting == "no-ground":
-        return Segmenter(name, method, None, {})
+        return Segmenter(name, method, None, None)
     remover = method_ground(cfg, name) if ground_remover == "own" else ground_remover
-    params = dict(cfg.get("ground", {}).get(remover, {}))
-    if remover not in cfg.get("ground", {}):
+    if remover not in REMOVERS:
         raise FlicInputError(
-            None, f"unknown ground remover {remover!r} (paper | bogoslavskyi | own)"
+            None, f"unknown ground remover {remover!r} ({' | '.join(REMOVERS)} | own)"
         )
-    return Segmenter(name, method, remover, params)
+    params = dict(cfg.get("ground", {}).get(remover, {}))
+    try:
+        built = REMOVERS[remover](**params)
+    except (TypeError, ValueError) as exc:
+        raise FlicInputError(None, f"[ground.{remover}] {describe(exc)}") from None
+    return Segmenter(name, method, remover, built)
 
 
 def resolve_method(method: str, mc: int | None) -> str:

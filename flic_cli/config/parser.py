@@ -69,7 +69,9 @@ def build_method(cfg: dict[str, Any], name: str, **override: Any) -> Any:
     try:
         return KINDS[kind](**params)
     except (TypeError, ValueError) as exc:
-        raise FlicInputError(None, f"method {name!r}: {exc}") from None
+        from flic_cli.config.component import describe
+
+        raise FlicInputError(None, f"[methods.{name}] {describe(exc)}") from None
 
 
 def method_ground(cfg: dict[str, Any], name: str) -> str:

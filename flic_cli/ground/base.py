@@ -1,0 +1,16 @@
+"""The one interface every ground remover implements: range image in, ground mask out."""
+
+from __future__ import annotations
+
+from typing import Protocol
+
+import numpy as np
+
+from flic_cli.range_image import RangeImage
+
+
+class GroundRemover(Protocol):
+    """A ground remover: a component (see :mod:`flic_cli.config.component`) called on a range
+    image; returns the (H, W) bool mask of its ground pixels (empty pixels are never ground)."""
+
+    def __call__(self, image: RangeImage) -> np.ndarray: ...
