@@ -54,7 +54,7 @@ def run(args: argparse.Namespace) -> None:
         ref = refs[max(i - 1, 0) % len(refs)]
         frame = timed("read", ds.load, ref)
         prep = timed("project", prepare, frame, args.setting, cfg["projection"])
-        ground = timed("ground", seg.extract_ground, prep.image)
+        ground = timed("ground", seg.extract_ground, prep.image, prep.points)
         labels = timed("cluster+labels", seg.method.segment, prep.image, prep.points, ground)
         if prep.labels is not None:
             timed("score", match_objects, prep.labels, labels, prep.points)

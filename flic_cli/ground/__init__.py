@@ -1,7 +1,7 @@
 """Ground extraction: the step between the range image and the clusterer.
 
-Every remover is a component (:mod:`flic_cli.config.component`) called as ``remover(image) ->
-(H, W) bool`` (True = ground pixel), see :class:`flic_cli.ground.base.GroundRemover`:
+Every remover is a component (:mod:`flic_cli.config.component`) called as ``remover(image,
+points) -> (H, W) bool`` (True = ground pixel), see :class:`flic_cli.ground.base.GroundRemover`:
 
 - ``paper`` -- :class:`PaperGround`, the FLIC paper's tan(beta) test with the height image;
 - ``bogoslavskyi`` -- :class:`BogoslavskyiGround`, Bogoslavskyi & Stachniss' angle image,
@@ -9,7 +9,7 @@ Every remover is a component (:mod:`flic_cli.config.component`) called as ``remo
 - the "No Ground" setting removes the ground classes' points by label before projection
   (:func:`flic_cli.classes.ground_mask`), so no remover runs.
 
-To add a remover: a component class with ``__call__(image)``, registered in :data:`REMOVERS`
+To add a remover: a component class with ``__call__(image, points)``, registered in :data:`REMOVERS`
 under the name that ``[ground.NAME]`` config tables and ``--ground-remover`` use.
 """
 

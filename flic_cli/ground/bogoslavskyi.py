@@ -144,6 +144,6 @@ class BogoslavskyiGround:
     window: Literal[5, 7, 9, 11] = 5
     start_angle_deg: Annotated[float, Field(gt=0, lt=90, description="degrees")] = 30.0
 
-    def __call__(self, image: RangeImage) -> np.ndarray:
+    def __call__(self, image: RangeImage, points: np.ndarray | None = None) -> np.ndarray:
         """(H, W) bool ground mask of ``image`` (see :func:`bogoslavskyi_ground`)."""
         return bogoslavskyi_ground(image, self.angle_deg, self.window, self.start_angle_deg)

@@ -132,6 +132,6 @@ class PaperGround:
     height_slope_deg: Annotated[float, Field(ge=0, lt=90, description="degrees")] = 10.0
     sensor_height_m: Annotated[float, Field(gt=0, description="metres")] = 1.73
 
-    def __call__(self, image: RangeImage) -> np.ndarray:
+    def __call__(self, image: RangeImage, points: np.ndarray | None = None) -> np.ndarray:
         """(H, W) bool ground mask of ``image`` (see :func:`paper_ground`)."""
         return paper_ground(image, self.max_slope_deg, self.sensor_height_m, self.height_slope_deg)

@@ -221,7 +221,7 @@ def _evaluate_frame(
             segmenter = make_segmenter(cfg, name, setting, ground_remover)
             if segmenter.ground_name not in grounds:
                 start = time.perf_counter()
-                mask = segmenter.extract_ground(prep.image)
+                mask = segmenter.extract_ground(prep.image, prep.points)
                 grounds[segmenter.ground_name] = (mask, time.perf_counter() - start)
             ground, ground_seconds = grounds[segmenter.ground_name]
             start = time.perf_counter()

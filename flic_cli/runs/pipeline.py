@@ -126,13 +126,13 @@ class Segmenter:
     ground_name: str | None
     remover: Any
 
-    def extract_ground(self, image: RangeImage) -> np.ndarray | None:
+    def extract_ground(self, image: RangeImage, points: np.ndarray) -> np.ndarray | None:
         """The remover's (H, W) ground mask, or None when there is no remover."""
-        return None if self.remover is None else self.remover(image)
+        return None if self.remover is None else self.remover(image, points)
 
     def __call__(self, image: RangeImage, points: np.ndarray) -> tuple[np.ndarray, Any]:
         """Per-point labels (0 = none) and the ground mask used (or None)."""
-        ground = self.extract_ground(image)
+        ground = self.extract_ground(image, points)
         return self.method.segment(image, points, ground), ground
 
     def with_param(self, value: float) -> Segmenter:

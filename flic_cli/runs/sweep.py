@@ -112,7 +112,7 @@ def sweep_frame(
         frame = load_labelled_frame(ref)
         prep = prepare(frame, setting, cfg.get("projection", {}))
         base: Segmenter = make_segmenter(cfg, method, setting, ground_remover)
-        ground = base.extract_ground(prep.image)
+        ground = base.extract_ground(prep.image, prep.points)
         rows = []
         for value in values:
             labels = base.with_param(float(value)).method.segment(prep.image, prep.points, ground)
