@@ -23,7 +23,7 @@ from flic_cli.config import load_config
 from flic_cli.io import open_dataset
 from flic_cli.io.atomic import atomic_write
 from flic_cli.metrics import match_objects
-from flic_cli.runs.pipeline import make_segmenter, prepare
+from flic_cli.runs.pipeline import build_segmenter, prepare
 
 
 def main() -> None:
@@ -35,11 +35,11 @@ def main() -> None:
     ds = open_dataset(args.data)
     rows = []
     for remover in ("paper", "bogoslavskyi"):
-        seg = make_segmenter(cfg, "flic0", "ground", remover)
+        seg = build_segmenter(cfg, "flic0", "ground", remover)
         removed_rel, removed_dist, recall, precision = [], [], [], []
         obj_pts = obj_removed = gnd_pts = gnd_removed = 0
         for ref in tqdm(ds.refs(), desc=remover, unit="frame"):
-            prep = prepare(ds.load(ref), "ground", cfg["projection"])
+            prep = prepare(ds.load(ref), "ground", cfg.projection)
             labels, ground = seg(prep.image, prep.points)
             on_ground = ground.reshape(-1)[prep.image.point_pixel]
             sem = prep.labels & 0xFFFF

@@ -16,7 +16,7 @@ from tqdm import tqdm
 
 from flic_cli.config import load_config
 from flic_cli.io import open_dataset
-from flic_cli.runs.pipeline import make_segmenter, prepare
+from flic_cli.runs.pipeline import build_segmenter, prepare
 
 
 def main() -> None:
@@ -25,10 +25,10 @@ def main() -> None:
     args = parser.parse_args()
     cfg = load_config()
     ds = open_dataset(args.log)
-    seg = make_segmenter(cfg, "flic0", "ground", "paper")
+    seg = build_segmenter(cfg, "flic0", "ground", "paper")
     stats = []
     for ref in tqdm(ds.refs(), unit="frame"):
-        prep = prepare(ds.load(ref), "ground", cfg["projection"])
+        prep = prepare(ds.load(ref), "ground", cfg.projection)
         labels, ground = seg(prep.image, prep.points)
         valid = int(prep.image.valid.sum())
         stats.append((valid, valid - int(ground.sum()), int(labels.max(initial=0))))

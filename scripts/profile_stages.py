@@ -22,7 +22,7 @@ import numpy as np  # noqa: E402
 from flic_cli.config import load_config  # noqa: E402
 from flic_cli.io import open_dataset  # noqa: E402
 from flic_cli.metrics import match_objects, segmentation_stats  # noqa: E402
-from flic_cli.runs.pipeline import make_segmenter, prepare  # noqa: E402
+from flic_cli.runs.pipeline import build_segmenter, prepare  # noqa: E402
 
 
 def main() -> None:
@@ -40,7 +40,7 @@ def main() -> None:
 def run(args: argparse.Namespace) -> None:
     cfg = load_config()
     ds = open_dataset(args.data)
-    seg = make_segmenter(cfg, args.method, args.setting, args.ground_remover)
+    seg = build_segmenter(cfg, args.method, args.setting, args.ground_remover)
     stages: dict[str, list[float]] = {}
 
     def timed(name, func, *a):
@@ -53,7 +53,7 @@ def run(args: argparse.Namespace) -> None:
     for i in range(args.repeat * len(refs) + 1):
         ref = refs[max(i - 1, 0) % len(refs)]
         frame = timed("read", ds.load, ref)
-        prep = timed("project", prepare, frame, args.setting, cfg["projection"])
+        prep = timed("project", prepare, frame, args.setting, cfg.projection)
         ground = timed("ground", seg.extract_ground, prep.image, prep.points)
         labels = timed("cluster+labels", seg.method.segment, prep.image, prep.points, ground)
         if prep.labels is not None:

@@ -186,7 +186,7 @@ def test_benchmark_frame_selection_and_threads(small_sample, tmp_path):
 @pytest.mark.parametrize(
     ("args", "message"),
     [
-        (["--methods", "flic0,nope"], "unknown method nope"),
+        (["--methods", "flic0,nope"], "unknown method 'nope'"),
         (["--dbscan-every", "0"], "--dbscan-every"),
         (["--threads", "0"], "--threads"),
     ],

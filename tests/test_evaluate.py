@@ -15,12 +15,8 @@ from typer.testing import CliRunner
 from flic_cli.cli import app
 from flic_cli.errors import FlicInputError
 from flic_cli.metrics import IOU_THRESHOLDS
-from flic_cli.runs.evaluate import (
-    FRAME_COLUMNS,
-    OBJECT_COLUMNS,
-    SCORE_COLUMNS,
-    TABLE_COLUMNS,
-)
+from flic_cli.runs.scoring import FRAME_COLUMNS, OBJECT_COLUMNS
+from flic_cli.runs.tables import SCORE_COLUMNS, TABLE_COLUMNS
 from flic_cli.runs.parallel import imap_frames
 
 runner = CliRunner()
@@ -241,7 +237,7 @@ def test_skip_missing(partly_labelled: Path, reference: Path, tmp_path: Path) ->
     out = tmp_path / "skip"
     result = _evaluate(partly_labelled, out, "--skip-missing", "--setting", "no-ground")
     assert result.exit_code == 0, result.output
-    assert "skipped 1 frames without .label files" in result.output
+    assert "left out 1 frames without .label files" in result.output
     objects = _read(out / "per_object.csv")
     assert sorted(objects["frame"].unique()) == [0, 2]
     ref = _read(reference / "per_object.csv")

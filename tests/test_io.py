@@ -561,10 +561,7 @@ def test_open_dataset_bad_paths(tmp_path: Path) -> None:
     (tmp_path / "other").mkdir()
     with pytest.raises(FlicInputError) as err:
         open_dataset(tmp_path / "other")
-    assert str(err.value) == (
-        f"{tmp_path / 'other'}: is neither a SemanticKITTI root/sequence (velodyne/*.bin) "
-        "nor a Moosmann log (img.cfg + scan*.png)"
-    )
+    assert str(err.value).startswith(f"{tmp_path / 'other'}: is none of: a SemanticKITTI root")
 
 
 @pytest.mark.parametrize(

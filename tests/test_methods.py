@@ -210,7 +210,9 @@ def test_drop_small_relabels_in_order_of_appearance():
 
 
 def test_flic_backends_agree_on_a_real_sized_scan(small_sample):
-    from flic_cli.config import build_method, load_config
+    import dataclasses
+
+    from flic_cli.config import load_config
     from flic_cli.ground import paper_ground
     from flic_cli.io import open_dataset
 
@@ -219,17 +221,22 @@ def test_flic_backends_agree_on_a_real_sized_scan(small_sample):
     ground = paper_ground(frame.image)
     cfg = load_config()
     for name in ("flic0", "flic14"):
-        fast = build_method(cfg, name).segment(frame.image, frame.points, ground)
-        ref = build_method(cfg, name, backend="scipy").segment(frame.image, frame.points, ground)
+        method = cfg.method(name).method
+        fast = method.segment(frame.image, frame.points, ground)
+        scipy = dataclasses.replace(method, backend="scipy")
+        ref = scipy.segment(frame.image, frame.points, ground)
         np.testing.assert_array_equal(fast, ref)
         assert fast.max() > 10
 
 
-def test_unknown_backend_is_refused():
-    from flic_cli.config import build_method, load_config
+def test_unknown_backend_is_refused(tmp_path):
+    from flic_cli.config import load_config
     from flic_cli.errors import FlicInputError
 
+    path = tmp_path / "bad.toml"
+    path.write_text('[methods.flic0]\nbackend = "cuda"\n')
     with pytest.raises(
-        FlicInputError, match=r"\[methods.flic0\] backend: Input should be 'numba' or 'scipy'"
+        FlicInputError,
+        match=r"bad.toml: \[methods.flic0\] backend: Input should be 'numba' or 'scipy'",
     ):
-        build_method(load_config(), "flic0", backend="cuda")
+        load_config(path)

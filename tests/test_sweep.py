@@ -25,8 +25,9 @@ def _sweep(data: Path, out: Path, *extra: str):
 def _evaluate_at(
     data: Path, out: Path, method: str, param: str, value: float, setting: str, frames=None
 ) -> pd.Series:
-    cfg = load_config()
-    cfg["methods"][method][param] = value
+    override = out.parent / f"{out.name}.toml"
+    override.write_text(f"[methods.{method}]\n{param} = {value!r}\n")
+    cfg = load_config(override)
     run_evaluate(data, out, [method], cfg, setting=setting, frames=frames, progress=False)
     return pd.read_csv(out / "per_setting.csv").iloc[0]
 

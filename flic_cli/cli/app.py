@@ -1,6 +1,9 @@
 """The Typer app and what every command shares: option names, error handling, data selection.
 
-Heavy modules are imported inside the commands, so ``flic --help`` answers at once."""
+Heavy modules are imported inside the commands, so ``flic --help`` answers at once. Option help
+that lists formats or ground removers is built from :mod:`flic_cli.registry`, the one place they
+are named.
+"""
 
 from __future__ import annotations
 
@@ -11,6 +14,9 @@ from pathlib import Path
 from typing import Annotated, Any
 
 import typer
+import typer.core
+
+from flic_cli import registry
 
 app = typer.Typer(
     name="flic",
@@ -25,21 +31,52 @@ app = typer.Typer(
     add_completion=False,
 )
 
+
+def _no_type_for_flags(display: Callable[..., Any]) -> Callable[..., Any]:
+    """Typer's rich help shows a ``<bool>`` type beside every on/off flag; flags take no value,
+    so they get no type column."""
+
+    @functools.wraps(display)
+    def wrapper(self: Any, ctx: Any) -> Any:
+        return None if getattr(self, "is_flag", False) else display(self, ctx)
+
+    return wrapper
+
+
+if hasattr(typer.core, "TyperOption") and hasattr(typer.core.TyperOption, "display_type_rich"):
+    typer.core.TyperOption.display_type_rich = _no_type_for_flags(
+        typer.core.TyperOption.display_type_rich
+    )
+
+_SAMPLE = "Default: the built-in synthetic sample."
+
 # ---- options shared by every command (same names everywhere) -------------------------------
 DataArg = Annotated[
     Path | None,
     typer.Argument(
-        help="SemanticKITTI root (with sequences/), one sequence folder, or a Moosmann log "
-        "(img.cfg + scanNNNNN.png). Default: the built-in synthetic sample.",
+        help=f"The data: {registry.choices(registry.FORMATS)}. {_SAMPLE}", show_default=False
+    ),
+]
+LabelledDataArg = Annotated[
+    Path | None,
+    typer.Argument(
+        help=f"Labelled data: {registry.choices(registry.FORMATS, labelled_only=True)}. {_SAMPLE}",
         show_default=False,
     ),
 ]
 SequencesOpt = Annotated[
-    str | None, typer.Option("--sequences", help="Comma-separated sequences, e.g. `00,05`.")
+    str | None,
+    typer.Option(
+        "--sequences",
+        help="Comma-separated sequences (or log folders), e.g. `00,05`. Default: all.",
+    ),
 ]
 FramesOpt = Annotated[
     str | None,
-    typer.Option("--frames", help="Frame range START:STOP (stop excluded), e.g. `0:100`, `500:`."),
+    typer.Option(
+        "--frames",
+        help="Frame numbers START:STOP (stop excluded), e.g. `0:100`, `500:`, `7`. Default: all.",
+    ),
 ]
 SettingOpt = Annotated[
     str,
@@ -51,25 +88,52 @@ SettingOpt = Annotated[
 ]
 ConfigOpt = Annotated[
     Path | None,
-    typer.Option("--config", help="TOML file overriding configs/default.toml (same layout)."),
-]
-
-
-MethodOpt = Annotated[
-    str,
-    typer.Option(help="`flic`, `bogoslavskyi`, `dbscan` or any [methods.NAME] of the config."),
-]
-McOpt = Annotated[
-    int | None, typer.Option(help="Map Connections for `--method flic`: 0, 1, 6 or 14.")
-]
-OwnGroundOpt = Annotated[
-    str,
     typer.Option(
-        "--ground-remover",
-        help="`own` (each method's own, e.g. Bogoslavskyi's for bogoslavskyi), `paper` or "
-        "`bogoslavskyi`.",
+        "--config",
+        help="TOML file laid over the presets (configs/default.toml): only the keys it changes, "
+        "and new method variants. `flic config` prints the result.",
     ),
 ]
+MethodOpt = Annotated[
+    str,
+    typer.Option(
+        help="A method variant of the config: `flic`, `bogoslavskyi`, `dbscan` or any "
+        "[methods.NAME] (`flic config` lists them)."
+    ),
+]
+McOpt = Annotated[
+    int | None,
+    typer.Option(
+        help="Map Connections for `--method flic`: 0, 1, 6 or 14 (the presets flic0 ... flic14). "
+        "Left out, `--method flic` means 0 MC."
+    ),
+]
+JobsOpt = Annotated[
+    int,
+    typer.Option(
+        "--jobs",
+        "-j",
+        help="Processes on this machine, one frame each at a time; 0 or a negative number: one "
+        "per CPU core. Results do not depend on it.",
+    ),
+]
+SkipBadOpt = Annotated[
+    bool,
+    typer.Option(
+        "--skip-bad",
+        help="Go on past frames whose input is bad (say which, and list them in skipped.csv) "
+        "instead of stopping at the first with an error naming its file.",
+    ),
+]
+
+
+def ground_remover_option(default_help: str) -> Any:
+    """The ``--ground-remover`` option, listing the registered removers."""
+    return typer.Option(
+        "--ground-remover",
+        help=f"{default_help} Removers: {registry.choices(registry.REMOVERS)}; `own`: each "
+        "method variant's own (its `ground` key, e.g. Bogoslavskyi's for bogoslavskyi).",
+    )
 
 
 def _fail(message: str) -> None:
@@ -78,14 +142,15 @@ def _fail(message: str) -> None:
 
 
 def friendly_errors(func: Callable[..., Any]) -> Callable[..., Any]:
-    """Turn bad input into one line on stderr and exit code 2 (no traceback)."""
+    """Bad input becomes one line on stderr and exit code 2 (no traceback); warnings print as
+    ``warning: <file>: <message>``."""
 
     @functools.wraps(func)
     def wrapper(*args: Any, **kwargs: Any) -> Any:
-        from flic_cli.errors import FlicInputError
+        from flic_cli.errors import FlicInputError, show_warning
 
         warnings.simplefilter("default")
-        warnings.formatwarning = lambda msg, cat, *a, **k: f"warning: {msg}\n"
+        warnings.showwarning = show_warning
         try:
             return func(*args, **kwargs)
         except FlicInputError as exc:

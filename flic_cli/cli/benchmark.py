@@ -13,19 +13,19 @@ from flic_cli.cli.app import (
     FramesOpt,
     SequencesOpt,
     SettingOpt,
+    SkipBadOpt,
     _data_or_sample,
     _selection,
     app,
     friendly_errors,
+    ground_remover_option,
 )
-
-DEFAULT_METHODS = "bogoslavskyi,flic0,flic1,flic6,flic14,dbscan"
 
 
 @app.command(
     epilog=(
         "Examples:\n\n"
-        "- `flic benchmark` (the synthetic sample's Moosmann-style log, all six methods)\n\n"
+        "- `flic benchmark` (the synthetic sample's Moosmann-style log, the default methods)\n\n"
         "- `flic benchmark ~/moosmann/log1 --out bench/ --dbscan-every 25`\n\n"
         "- `flic benchmark ~/kitti --sequences 08 --frames 0:500 --methods flic0,flic14 "
         "--repeat 3`"
@@ -35,8 +35,14 @@ DEFAULT_METHODS = "bogoslavskyi,flic0,flic1,flic6,flic14,dbscan"
 def benchmark(
     data: DataArg = None,
     methods: Annotated[
-        str, typer.Option("--methods", help="Comma-separated [methods.NAME] variants to time.")
-    ] = DEFAULT_METHODS,
+        str | None,
+        typer.Option(
+            "--methods",
+            help="Comma-separated method variants to time. Default: the config's "
+            "`default_methods` (`flic config` shows them).",
+            show_default=False,
+        ),
+    ] = None,
     out: Annotated[
         Path,
         typer.Option(help="Output folder for the CSV tables, environment.json and the plots."),
@@ -47,9 +53,8 @@ def benchmark(
     config: ConfigOpt = None,
     ground_remover: Annotated[
         str,
-        typer.Option(
-            help="`own` (each method's own, e.g. Bogoslavskyi's for bogoslavskyi), `paper` or "
-            "`bogoslavskyi`. Ground extraction is timed as part of every method."
+        ground_remover_option(
+            "Ground extraction of the `ground` setting, timed as part of every method."
         ),
     ] = "own",
     warmup: Annotated[
@@ -77,6 +82,7 @@ def benchmark(
     plots: Annotated[
         bool, typer.Option("--plots/--no-plots", help="Write runtime.png, boxplot_hz.png, ...")
     ] = True,
+    skip_bad: SkipBadOpt = False,
 ) -> None:
     """Time the segmentation of every frame (range image in, labels out, ground extraction
     included), single-threaded, after a warm-up; file reading and projection are timed as
@@ -109,5 +115,6 @@ def benchmark(
         dbscan_every=dbscan_every,
         threads=threads,
         plots=plots,
+        skip_bad=skip_bad,
     )
     typer.echo(result.report())

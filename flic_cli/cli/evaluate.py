@@ -9,42 +9,26 @@ import typer
 
 from flic_cli.cli.app import (
     ConfigOpt,
-    DataArg,
     FramesOpt,
+    JobsOpt,
+    LabelledDataArg,
     McOpt,
     MethodOpt,
     SequencesOpt,
+    SkipBadOpt,
     _data_or_sample,
     _selection,
     app,
     friendly_errors,
+    ground_remover_option,
 )
 
-_DEFAULT_METHODS = "bogoslavskyi,flic0,flic1,flic6,flic14,dbscan"
-
-JobsOpt = Annotated[
-    int,
-    typer.Option(
-        "--jobs",
-        "-j",
-        help="Processes on this machine, one frame each at a time (0 = one per CPU core). "
-        "Results do not depend on it.",
-    ),
-]
 SchedulerOpt = Annotated[
     str | None,
     typer.Option(
         "--scheduler",
         help="Address of a dask.distributed scheduler (e.g. `tcp://10.0.0.5:8786`) to send the "
         "frames to, instead of local processes. Needs `pip install 'flic[distributed]'`.",
-    ),
-]
-GroundRemoverOpt = Annotated[
-    str,
-    typer.Option(
-        "--ground-remover",
-        help="Ground extraction of the `ground` setting: `paper` (SPEC 4: the paper's for every "
-        "method) or `own` (each method's `ground` key: Bogoslavskyi's for bogoslavskyi).",
     ),
 ]
 SkipMissingOpt = Annotated[
@@ -69,7 +53,7 @@ def _interrupted(out: Path, resumable: bool) -> None:
 @app.command(
     epilog=(
         "Examples:\n\n"
-        "- `flic evaluate` (the synthetic sample, all six methods, both settings)\n\n"
+        "- `flic evaluate` (the synthetic sample, the default methods, both settings)\n\n"
         "- `flic evaluate ~/kitti --jobs 8 --out eval/` "
         "(the paper's Table 1 on sequences 00-10)\n\n"
         "- `flic evaluate ~/kitti --sequences 08 --frames 0:500 --methods flic0,flic14 "
@@ -79,21 +63,23 @@ def _interrupted(out: Path, resumable: bool) -> None:
         "Writes into OUT: `table.csv` (Table 1 layout), `per_setting.csv`, `per_sequence.csv`, "
         "`by_class.csv`, `by_distance.csv` (0-20, 20-40, >40 m), `per_frame.csv` (clusters, "
         "over-/under-segmentation, time) and `per_object.csv` (one row per GT object, IoU as a "
-        "fraction). Scores are in percent. `parts/` holds the per-frame results as they finish "
-        "and `run.json` the run's parameters."
+        "fraction), `skipped.csv` with --skip-bad. Scores are in percent. `parts/` holds the "
+        "per-frame results as they finish and `run.json` the run's parameters."
     )
 )
 @friendly_errors
 def evaluate(
-    data: DataArg = None,
+    data: LabelledDataArg = None,
     methods: Annotated[
-        str,
+        str | None,
         typer.Option(
             "--methods",
             "-m",
-            help="Comma-separated [methods.NAME] variants of the config, in table order.",
+            help="Comma-separated method variants, in table order. Default: the config's "
+            "`default_methods` (`flic config` shows them).",
+            show_default=False,
         ),
-    ] = _DEFAULT_METHODS,
+    ] = None,
     setting: Annotated[
         str,
         typer.Option(
@@ -114,7 +100,10 @@ def evaluate(
         ),
     ] = False,
     skip_missing: SkipMissingOpt = False,
-    ground_remover: GroundRemoverOpt = "paper",
+    skip_bad: SkipBadOpt = False,
+    ground_remover: Annotated[
+        str, ground_remover_option("Ground extraction of the `ground` setting (SPEC 4: `paper`).")
+    ] = "paper",
     sequences: SequencesOpt = None,
     frames: FramesOpt = None,
     config: ConfigOpt = None,
@@ -131,12 +120,12 @@ def evaluate(
     names = parse_methods(methods, cfg)
     seqs, frm = _selection(sequences, frames)
 
-    def started(total: int, done: int, skipped: int) -> None:
+    def started(total: int, done: int, missing: int) -> None:
         parts = [f"evaluating {total} frames"]
         if done:
             parts.append(f"{done} finished earlier")
-        if skipped:
-            parts.append(f"skipped {skipped} frames without .label files")
+        if missing:
+            parts.append(f"left out {missing} frames without .label files")
         typer.echo(", ".join(parts), err=True)
 
     try:
@@ -153,11 +142,19 @@ def evaluate(
             scheduler=scheduler,
             resume=resume,
             skip_missing=skip_missing,
+            skip_bad=skip_bad,
             on_start=started,
         )
     except KeyboardInterrupt:
         _interrupted(out, resumable=True)
     typer.echo(result.text())
+    if result.skipped:
+        typer.echo(
+            f"skipped {len(result.skipped)} bad frame(s): "
+            + "; ".join(s.line() for s in result.skipped[:3])
+            + (" ..." if len(result.skipped) > 3 else ""),
+            err=True,
+        )
     typer.echo(f"wrote {', '.join(p.name for p in result.files)} -> {result.out}")
 
 
@@ -177,7 +174,7 @@ def evaluate(
 )
 @friendly_errors
 def sweep_threshold(
-    data: DataArg = None,
+    data: LabelledDataArg = None,
     method: MethodOpt = "flic",
     mc: McOpt = None,
     start: Annotated[
@@ -197,7 +194,10 @@ def sweep_threshold(
     jobs: JobsOpt = 1,
     scheduler: SchedulerOpt = None,
     skip_missing: SkipMissingOpt = False,
-    ground_remover: GroundRemoverOpt = "paper",
+    skip_bad: SkipBadOpt = False,
+    ground_remover: Annotated[
+        str, ground_remover_option("Ground extraction of the `ground` setting.")
+    ] = "paper",
     sequences: SequencesOpt = None,
     frames: FramesOpt = None,
     config: ConfigOpt = None,
@@ -227,10 +227,13 @@ def sweep_threshold(
             jobs=jobs,
             scheduler=scheduler,
             skip_missing=skip_missing,
+            skip_bad=skip_bad,
         )
     except KeyboardInterrupt:
         _interrupted(out, resumable=False)
+    if result.missing:
+        typer.echo(f"left out {result.missing} frames without .label files", err=True)
     if result.skipped:
-        typer.echo(f"skipped {result.skipped} frames without .label files", err=True)
+        typer.echo(f"skipped {len(result.skipped)} bad frame(s), listed in skipped.csv", err=True)
     typer.echo(result.table.to_string(index=False, na_rep="-", float_format=lambda v: f"{v:.2f}"))
     typer.echo(result.line())

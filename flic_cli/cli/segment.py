@@ -1,4 +1,4 @@
-"""``flic segment`` and ``flic sample``."""
+"""``flic segment``, ``flic sample`` and ``flic config``."""
 
 from __future__ import annotations
 
@@ -11,15 +11,17 @@ from flic_cli.cli.app import (
     ConfigOpt,
     DataArg,
     FramesOpt,
+    JobsOpt,
     McOpt,
     MethodOpt,
-    OwnGroundOpt,
     SequencesOpt,
     SettingOpt,
+    SkipBadOpt,
     _data_or_sample,
     _selection,
     app,
     friendly_errors,
+    ground_remover_option,
 )
 
 
@@ -29,7 +31,8 @@ from flic_cli.cli.app import (
         "- `flic segment` (the synthetic sample, FLIC without MC)\n\n"
         "- `flic segment ~/kitti --sequences 08 --frames 0:500 --method flic --mc 14 "
         "--out pred/`\n\n"
-        "- `flic segment ~/moosmann/log1 --method bogoslavskyi --render 10 --out pred/`"
+        "- `flic segment ~/moosmann/log1 --method bogoslavskyi --render 10 --out pred/`\n\n"
+        "A run that stops at a bad frame writes nothing (use --skip-bad to go on past it)."
     )
 )
 @friendly_errors
@@ -44,14 +47,22 @@ def segment(
     frames: FramesOpt = None,
     setting: SettingOpt = "ground",
     config: ConfigOpt = None,
-    ground_remover: OwnGroundOpt = "own",
+    ground_remover: Annotated[
+        str, ground_remover_option("Ground extraction of the `ground` setting.")
+    ] = "own",
     render: Annotated[
         int | None,
-        typer.Option(help="Also write a PNG of this frame number, coloured by cluster."),
+        typer.Option(
+            help="Also write a PNG of this frame number (one of the selected frames), coloured "
+            "by cluster."
+        ),
     ] = None,
+    jobs: JobsOpt = 1,
+    skip_bad: SkipBadOpt = False,
 ) -> None:
     """Segment scans and write predictions in SemanticKITTI `.label` encoding
-    (cluster id in the upper 16 bits, 0 = unclustered) under `OUT/sequences/NN/predictions/`."""
+    (cluster id in the upper 16 bits, 0 = unclustered; one label per point of the `.bin`)
+    under `OUT/sequences/NN/predictions/`."""
     from flic_cli.config import load_config
     from flic_cli.runs.pipeline import resolve_method
     from flic_cli.runs.segment import run_segment
@@ -68,6 +79,8 @@ def segment(
         frm,
         ground_remover,
         render,
+        jobs=jobs,
+        skip_bad=skip_bad,
     )
     typer.echo(summary.line())
 
@@ -76,7 +89,7 @@ def segment(
 @friendly_errors
 def sample(
     out: Annotated[Path, typer.Argument(help="Output folder.")],
-    frames: Annotated[int, typer.Option("--frames", help="Number of frames.")] = 20,
+    frames: Annotated[int, typer.Option("--frames", help="Number of frames (>= 1).")] = 20,
     seed: Annotated[int, typer.Option(help="Scene seed.")] = 0,
 ) -> None:
     """Write the deterministic synthetic sample: a SemanticKITTI sequence (with labels) and the
@@ -85,3 +98,24 @@ def sample(
 
     paths = write_sample(out, frames=frames, seed=seed)
     typer.echo(f"wrote {frames} frames: {paths.kitti_root} and {paths.moosmann_log}")
+
+
+@app.command(
+    name="config",
+    epilog=(
+        "Examples:\n\n"
+        "- `flic config` (the presets, every default included)\n\n"
+        "- `flic config --config my.toml` (what a run with `--config my.toml` uses)"
+    ),
+)
+@friendly_errors
+def show_config(config: ConfigOpt = None) -> None:
+    """Print the effective configuration as TOML: the presets with your `--config` laid over
+    them, every parameter of every component with its value (defaults included). Errors in your
+    file are reported with the file, the table and key, and the reason."""
+    import tomli_w
+
+    from flic_cli.config import load_config
+
+    cfg = load_config(config)
+    typer.echo(tomli_w.dumps(cfg.as_dict(), multiline_strings=False), nl=False)

@@ -1,12 +1,13 @@
-"""Configuration: the typed components' defaults, the presets in ``flic_cli/configs/`` and the
-user's ``--config`` file, validated once at load."""
+"""Configuration, validated once at load into typed objects.
 
-from flic_cli.config.parser import (
-    GROUND_REMOVERS,
-    build_method,
-    default_config,
-    load_config,
-    method_ground,
-)
+- :mod:`flic_cli.config.component` -- what a configurable component is (methods, ground removers,
+  the projection): a frozen, validated dataclass holding its parameters' single defaults;
+- :mod:`flic_cli.config.schema` -- :class:`Config` and :class:`MethodSpec`, what runs work with;
+- :mod:`flic_cli.config.parser` -- reading the presets (``configs/default.toml``) and the user's
+  ``--config`` file into a :class:`Config`.
+"""
 
-__all__ = ["GROUND_REMOVERS", "build_method", "default_config", "load_config", "method_ground"]
+from flic_cli.config.parser import defaults_path, load_config, parse_config
+from flic_cli.config.schema import Config, MethodSpec
+
+__all__ = ["Config", "MethodSpec", "defaults_path", "load_config", "parse_config"]

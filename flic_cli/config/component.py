@@ -44,13 +44,9 @@ def describe(exc: Exception) -> str:
         key = ".".join(str(k) for k in err["loc"]) or "value"
         msg = err["msg"].removeprefix("Value error, ")
         if err["type"] == "unexpected_keyword_argument":
-            msg = "unknown key"
-        parts.append(
-            f"{key}: {msg}"
-            + (
-                f" (got {err['input']!r})"
-                if "input" in err and err["type"] != "unexpected_keyword_argument"
-                else ""
-            )
-        )
+            parts.append(f"{key}: unknown key")
+        elif "input" in err and not isinstance(err["input"], dict):
+            parts.append(f"{key}: {msg} (got {err['input']!r})")
+        else:
+            parts.append(f"{key}: {msg}")
     return "; ".join(parts)

@@ -9,16 +9,19 @@ points) -> (H, W) bool`` (True = ground pixel), see :class:`flic_cli.ground.base
 - the "No Ground" setting removes the ground classes' points by label before projection
   (:func:`flic_cli.classes.ground_mask`), so no remover runs.
 
-To add a remover: a component class with ``__call__(image, points)``, registered in :data:`REMOVERS`
-under the name that ``[ground.NAME]`` config tables and ``--ground-remover`` use.
+To add a remover: a component class with ``__call__(image, points)``, named in
+:data:`flic_cli.registry.REMOVERS` under the name that ``[ground.NAME]`` config tables and
+``--ground-remover`` use.
 """
 
 from flic_cli.ground.base import GroundRemover
 from flic_cli.ground.bogoslavskyi import BogoslavskyiGround, bogoslavskyi_ground
 from flic_cli.ground.paper import PaperGround, paper_ground
+from flic_cli.registry import REMOVERS as _REMOVERS
+from flic_cli.registry import load_all
 
-#: Ground removers by name.
-REMOVERS: dict[str, type] = {"paper": PaperGround, "bogoslavskyi": BogoslavskyiGround}
+#: Ground remover classes by name (from :data:`flic_cli.registry.REMOVERS`).
+REMOVERS: dict[str, type] = load_all(_REMOVERS)
 
 __all__ = [
     "REMOVERS",

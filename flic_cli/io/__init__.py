@@ -15,7 +15,6 @@ from flic_cli.io.base import Dataset, Frame, FrameRef
 from flic_cli.io.moosmann import (
     ImgCfg,
     MoosmannDataset,
-    is_moosmann,
     read_img_cfg,
     read_png_range,
     write_img_cfg,
@@ -26,7 +25,6 @@ from flic_cli.io.semantickitti import (
     SemanticKittiDataset,
     encode_labels,
     instance,
-    is_semantickitti,
     predictions_path,
     read_bin,
     read_calib,
@@ -41,8 +39,14 @@ from flic_cli.io.semantickitti import (
     write_poses,
     write_predictions,
 )
+from flic_cli.registry import FORMATS as _FORMATS
+from flic_cli.registry import load_all
+
+#: Dataset format classes by name (from :data:`flic_cli.registry.FORMATS`), tried in this order.
+FORMATS: dict[str, type] = load_all(_FORMATS)
 
 __all__ = [
+    "FORMATS",
     "Dataset",
     "Frame",
     "FrameRef",
@@ -101,17 +105,10 @@ def open_dataset(
     path = Path(path)
     if not path.exists():
         raise FlicInputError(path, "does not exist")
-    if is_semantickitti(path):
-        return SemanticKittiDataset(path, sequences, frames, require_labels)
-    if is_moosmann(path):
-        if require_labels:
-            raise FlicInputError(path, "is a Moosmann log, which has no ground-truth labels")
-        return MoosmannDataset(path, sequences, frames)
-    raise FlicInputError(
-        path,
-        "is neither a SemanticKITTI root/sequence (velodyne/*.bin) "
-        "nor a Moosmann log (img.cfg + scan*.png)",
-    )
+    for cls in FORMATS.values():
+        if cls.detect(path):
+            return cls(path, sequences, frames, require_labels)
+    raise FlicInputError(path, "is none of: " + "; ".join(e.summary for e in _FORMATS.values()))
 
 
 _FRAMES = re.compile(r"([0-9]*):([0-9]*)|([0-9]+)")

@@ -8,6 +8,8 @@ folder and is renamed over the target only once it is complete.
 from __future__ import annotations
 
 import os
+import shutil
+import tempfile
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
@@ -70,3 +72,33 @@ def read_text(path: str | Path) -> str:
         return read_bytes(path).decode("utf-8")
     except UnicodeDecodeError:
         raise FlicInputError(path, "is not a UTF-8 text file") from None
+
+
+@contextmanager
+def staged_folder(out: str | Path) -> Iterator[Path]:
+    """Write a run's many output files so that a failed run leaves none of them.
+
+    Yields a temporary folder beside ``out`` (same file system) to write into; when the block
+    succeeds, every file in it is moved to the same place under ``out`` (replacing files of an
+    earlier run), and the temporary folder is removed. When the block fails, the temporary folder
+    is removed and ``out`` is left as it was.
+
+    Raises
+    ------
+    FlicInputError
+        When the folder beside ``out`` cannot be written.
+    """
+    out = Path(out).resolve()
+    try:
+        out.parent.mkdir(parents=True, exist_ok=True)
+        tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.staging-", dir=out.parent))
+    except OSError:
+        raise FlicInputError(out.parent, "output folder is not writable") from None
+    try:
+        yield tmp
+        for src in sorted(p for p in tmp.rglob("*") if p.is_file()):
+            dst = out / src.relative_to(tmp)
+            dst.parent.mkdir(parents=True, exist_ok=True)
+            os.replace(src, dst)
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)

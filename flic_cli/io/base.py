@@ -64,13 +64,22 @@ class Frame:
 
 
 class Dataset(Protocol):
-    """A dataset format: lists its frames, loads one frame."""
+    """A dataset format: lists its frames, loads one frame.
+
+    A format class also recognises its folders (``detect(path) -> bool``, a static method), is
+    constructed as ``cls(root, sequences, frames, require_labels)`` and is named in
+    :data:`flic_cli.registry.FORMATS`.
+    """
 
     root: Path
     format: str
 
     def refs(self) -> list[FrameRef]:
         """Every selected frame, ordered by sequence then frame number."""
+        ...
+
+    def folders(self) -> list[Path]:
+        """The folders the selected frames live in (outputs must not go inside them)."""
         ...
 
     def load(self, ref: FrameRef) -> Frame:

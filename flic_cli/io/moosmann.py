@@ -213,7 +213,12 @@ def is_moosmann(path: Path) -> bool:
 
 
 def _log_name(scans: Path) -> str:
-    return scans.parent.name if scans.name == "range" else scans.name
+    return _log_dir(scans).name
+
+
+def _log_dir(scans: Path) -> Path:
+    """The log folder of a folder of scans (the scans may sit in its ``range/``)."""
+    return scans.parent if scans.name == "range" else scans
 
 
 class MoosmannDataset:
@@ -235,13 +240,17 @@ class MoosmannDataset:
     """
 
     format = FORMAT
+    detect = staticmethod(is_moosmann)
 
     def __init__(
         self,
         root: str | Path,
         sequences: list[str] | None = None,
         frames: tuple[int | None, int | None] | None = None,
+        require_labels: bool = False,
     ) -> None:
+        if require_labels:
+            raise FlicInputError(root, "is a Moosmann log, which has no ground-truth labels")
         self.root = Path(root)
         if not self.root.is_dir():
             raise FlicInputError(self.root, "is not a folder")
@@ -277,6 +286,10 @@ class MoosmannDataset:
     def refs(self) -> list[FrameRef]:
         """Every selected frame, ordered by log then frame number."""
         return list(self._refs)
+
+    def folders(self) -> list[Path]:
+        """The folders of the selected logs (outputs must not go inside them)."""
+        return sorted({_log_dir(r.path.parent) for r in self._refs})
 
     def load(self, ref: FrameRef) -> Frame:
         """Read one frame; an all-zero image gives a frame with 0 points.

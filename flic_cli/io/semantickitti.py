@@ -372,6 +372,7 @@ class SemanticKittiDataset:
     """
 
     format = FORMAT
+    detect = staticmethod(is_semantickitti)
 
     def __init__(
         self,
@@ -431,6 +432,10 @@ class SemanticKittiDataset:
     def refs(self) -> list[FrameRef]:
         """Every selected frame, ordered by sequence then frame number."""
         return list(self._refs)
+
+    def folders(self) -> list[Path]:
+        """The folders of the selected sequences (outputs must not go inside them)."""
+        return sorted({r.path.parents[1] for r in self._refs})
 
     def load(self, ref: FrameRef) -> Frame:
         """Read one frame (points with non-finite coordinates dropped, with a warning)."""

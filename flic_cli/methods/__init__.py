@@ -1,13 +1,15 @@
-"""The clusterers. To add a method: a frozen dataclass with ``segment(image, points, ground)``
-(see :class:`flic_cli.methods.base.Method`) registered in ``KINDS`` under the ``kind`` name that
-config files use."""
+"""The clusterers. To add a method: a component class with ``segment(image, points, ground)``
+(see :class:`flic_cli.methods.base.Method` and :mod:`flic_cli.config.component`), named in
+:data:`flic_cli.registry.METHODS` under the ``kind`` that config files use."""
 
 from flic_cli.methods.base import Method, drop_small
 from flic_cli.methods.bogoslavskyi import Bogoslavskyi, bogoslavskyi_labels
 from flic_cli.methods.dbscan import Dbscan, dbscan_labels
 from flic_cli.methods.flic import Flic, flic_labels
+from flic_cli.registry import METHODS, load_all
 
-KINDS: dict[str, type] = {"flic": Flic, "bogoslavskyi": Bogoslavskyi, "dbscan": Dbscan}
+#: Method classes by kind (from :data:`flic_cli.registry.METHODS`).
+KINDS: dict[str, type] = load_all(METHODS)
 
 __all__ = [
     "KINDS",

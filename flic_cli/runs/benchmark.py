@@ -48,7 +48,6 @@ from __future__ import annotations
 import gc
 import json
 import time
-import warnings
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -56,13 +55,17 @@ from typing import Any
 
 import numpy as np
 import pandas as pd
-from tqdm import tqdm
 
+from flic_cli.config import Config
 from flic_cli.errors import FlicInputError
 from flic_cli.io import open_dataset
 from flic_cli.io.atomic import atomic_write
+from flic_cli.io.base import FrameRef
+from flic_cli.projection import Projection
 from flic_cli.runs.environment import collect_environment, environment_line, thread_limits
-from flic_cli.runs.pipeline import Segmenter, make_segmenter, prepare
+from flic_cli.runs.frames import FrameLoop, sort_skipped, write_skipped
+from flic_cli.runs.output import check_output_dir
+from flic_cli.runs.pipeline import Segmenter, build_segmenters, prepare
 
 #: The stages timed besides the methods (file reading, projection to the range image).
 STAGES = ("read", "project")
@@ -274,11 +277,78 @@ def _plots(frames: pd.DataFrame, methods: list[str], out: Path, title: str) -> l
     return paths
 
 
+class BenchJob:
+    """Times one frame: reading, projection, then every method (in this process only).
+
+    On the first frame that loads, every method first runs ``warmup`` untimed times (JIT
+    compilation or numba's on-disk cache load, first-use imports); the first call's time is kept
+    apart. Methods are interleaved per frame so that slow drifts affect all alike.
+    Returns the frame's rows of ``frames.csv``.
+    """
+
+    def __init__(
+        self,
+        dataset: Any,
+        segmenters: tuple[Segmenter, ...],
+        every: tuple[int, ...],
+        setting: str,
+        projection: Projection,
+        index: dict[FrameRef, int],
+        warmup: int,
+        repeat: int,
+    ) -> None:
+        self.dataset = dataset
+        self.segmenters = segmenters
+        self.every = every
+        self.setting = setting
+        self.projection = projection
+        self.index = index
+        self.warmup = warmup
+        self.repeat = repeat
+        self.first_call: dict[str, float] = {}
+        self.warm_ms: dict[str, float] = {}
+        self.warm_frame: dict[str, Any] | None = None
+
+    def _warm_up(self, ref: FrameRef) -> None:
+        t0 = time.perf_counter_ns()
+        frame = self.dataset.load(ref)
+        t1 = time.perf_counter_ns()
+        prep = prepare(frame, self.setting, self.projection)
+        t2 = time.perf_counter_ns()
+        self.first_call = {"read": (t1 - t0) / 1e6, "project": (t2 - t1) / 1e6}
+        for seg in self.segmenters:
+            for k in range(self.warmup):
+                _, ns = _timed(lambda seg=seg: seg(prep.image, prep.points), 1)
+                if k == 0:
+                    self.first_call[seg.name] = ns / 1e6
+                self.warm_ms[seg.name] = ns / 1e6
+        self.warm_frame = {"sequence": ref.sequence, "frame": ref.frame}
+
+    def __call__(self, ref: FrameRef) -> list[tuple]:
+        if self.warm_frame is None and self.warmup > 0:
+            self._warm_up(ref)
+        index = self.index[ref]
+        frame, ns_read = _timed(lambda: self.dataset.load(ref), 1)
+        prep, ns_proj = _timed(lambda: prepare(frame, self.setting, self.projection), self.repeat)
+        n_points = int(prep.points.shape[0])
+        rows = [
+            ("read", index, ref.sequence, ref.frame, ns_read / 1e6, prep.n_scan, -1),
+            ("project", index, ref.sequence, ref.frame, ns_proj / 1e6, n_points, -1),
+        ]
+        for seg, every in zip(self.segmenters, self.every, strict=True):
+            if index % every:
+                continue
+            (labels, _), ns = _timed(lambda seg=seg: seg(prep.image, prep.points), self.repeat)
+            clusters = int(labels.max(initial=0))
+            rows.append((seg.name, index, ref.sequence, ref.frame, ns / 1e6, n_points, clusters))
+        return rows
+
+
 def run_benchmark(
     data: Path,
     out: Path,
     methods: list[str],
-    cfg: dict[str, Any],
+    config: Config,
     setting: str = "ground",
     sequences: list[str] | None = None,
     frames: tuple[int | None, int | None] | None = None,
@@ -289,6 +359,7 @@ def run_benchmark(
     threads: int = 1,
     plots: bool = True,
     progress: bool = True,
+    skip_bad: bool = False,
 ) -> BenchmarkResult:
     """Time every method on every selected frame and write the tables, plots and environment.
 
@@ -297,10 +368,11 @@ def run_benchmark(
     data : SemanticKITTI root or sequence, or Moosmann log.
     out : output folder (created).
     methods : method variant names of the config.
-    cfg : loaded config.
+    config : loaded config.
     setting : ``"ground"`` (ground extraction timed as part of every method) or ``"no-ground"``.
     sequences, frames : the selection (see :func:`flic_cli.io.open_dataset`).
-    ground_remover : ``"own"``, ``"paper"`` or ``"bogoslavskyi"`` (see ``make_segmenter``).
+    ground_remover : ``"own"`` or a remover's name (see
+        :func:`flic_cli.runs.pipeline.build_segmenter`).
     warmup : untimed runs of every method on the first frame (0: the first timed frame includes
         compilation).
     repeat : timed runs per frame and method; the median is kept.
@@ -309,6 +381,8 @@ def run_benchmark(
     threads : threads of numba and the native thread pools during the run.
     plots : write the PNG plots.
     progress : show a progress bar.
+    skip_bad : go on past frames whose input is bad (listed in ``skipped.csv``) instead of
+        stopping at the first.
 
     Returns
     -------
@@ -324,61 +398,22 @@ def run_benchmark(
     methods = list(dict.fromkeys(methods))
     ds = open_dataset(data, sequences, frames, require_labels=setting == "no-ground")
     refs = ds.refs()
-    segs: dict[str, Segmenter] = {
-        m: make_segmenter(cfg, m, setting, ground_remover) for m in methods
-    }
-    every = {m: (dbscan_every if cfg["methods"][m].get("kind") == "dbscan" else 1) for m in methods}
-    projection = cfg.get("projection", {})
-
-    rows: list[tuple] = []
-    first_call: dict[str, float] = {}
-    warm_ms: dict[str, float] = {}
-    warm_frame: dict[str, Any] | None = None
-    skipped: list[str] = []
+    out = check_output_dir(Path(out), ds.folders())
+    segs = build_segmenters(config, methods, setting, ground_remover)
+    job = BenchJob(
+        ds,
+        tuple(segs),
+        tuple(dbscan_every if s.kind == "dbscan" else 1 for s in segs),
+        setting,
+        config.projection,
+        {r: k for k, r in enumerate(refs)},
+        warmup,
+        repeat,
+    )
     with thread_limits(threads) as thread_info:
-        for index, ref in enumerate(
-            tqdm(refs, desc="benchmark", unit="frame", disable=not progress)
-        ):
-            if warm_frame is None and warmup > 0:
-                try:
-                    t0 = time.perf_counter_ns()
-                    frame = ds.load(ref)
-                    t1 = time.perf_counter_ns()
-                except FlicInputError as exc:
-                    skipped.append(str(exc))
-                    warnings.warn(f"skipping frame: {exc}", stacklevel=2)
-                    continue
-                prep = prepare(frame, setting, projection)
-                t2 = time.perf_counter_ns()
-                first_call = {"read": (t1 - t0) / 1e6, "project": (t2 - t1) / 1e6}
-                for m, seg in segs.items():
-                    for k in range(warmup):
-                        _, ns = _timed(lambda seg=seg, prep=prep: seg(prep.image, prep.points), 1)
-                        if k == 0:
-                            first_call[m] = ns / 1e6
-                        warm_ms[m] = ns / 1e6
-                warm_frame = {"sequence": ref.sequence, "frame": ref.frame}
-                del frame, prep
-            try:
-                frame, ns_read = _timed(lambda ref=ref: ds.load(ref), 1)
-            except FlicInputError as exc:
-                skipped.append(str(exc))
-                warnings.warn(f"skipping frame: {exc}", stacklevel=2)
-                continue
-            prep, ns_proj = _timed(lambda frame=frame: prepare(frame, setting, projection), repeat)
-            n_scan, n_points = prep.n_scan, int(prep.points.shape[0])
-            rows.append(("read", index, ref.sequence, ref.frame, ns_read / 1e6, n_scan, -1))
-            rows.append(("project", index, ref.sequence, ref.frame, ns_proj / 1e6, n_points, -1))
-            for m, seg in segs.items():
-                if index % every[m]:
-                    continue
-                (labels, _), ns = _timed(
-                    lambda seg=seg, prep=prep: seg(prep.image, prep.points), repeat
-                )
-                clusters = int(labels.max(initial=0))
-                rows.append((m, index, ref.sequence, ref.frame, ns / 1e6, n_points, clusters))
-            del frame, prep
-
+        loop = FrameLoop(job, refs, skip_bad=skip_bad, desc="benchmark", progress=progress)
+        rows = [row for _, frame_rows in loop for row in frame_rows]
+    every = dict(zip(methods, job.every, strict=True))
     if not rows:
         raise FlicInputError(data, "no frame could be read")
     table = pd.DataFrame(rows, columns=FRAME_COLUMNS)
@@ -404,8 +439,8 @@ def run_benchmark(
             f"numba runs {thread_info['numba']} thread(s), not {threads}: NUMBA_NUM_THREADS was "
             f"{thread_info['numba_max']} when numba was imported"
         )
-    if skipped:
-        notes.append(f"skipped {len(skipped)} unreadable frame(s) (see environment.json)")
+    if loop.skipped:
+        notes.append(loop.note() or "")
     if warmup == 0:
         notes.append("no warm-up (--warmup 0): the first frame's times include compilation")
 
@@ -417,27 +452,25 @@ def run_benchmark(
         format=getattr(ds, "format", None),
         setting=setting,
         ground_remover=ground_remover,
-        methods={
-            m: {"kind": cfg["methods"][m].get("kind"), "ground": segs[m].ground_name}
-            for m in methods
-        },
+        methods={s.name: {"kind": s.kind, "ground": s.ground_name} for s in segs},
         frames_selected=len(refs),
         frames_timed=timed_frames,
         repeat=repeat,
         dbscan_every=dbscan_every,
         subsampled={m: every[m] for m in methods if every[m] > 1},
-        skipped_frames=skipped,
+        skipped_frames=[s.line() for s in sort_skipped(loop.skipped)],
         warmup={
             "runs": warmup,
-            "frame": warm_frame,
-            "first_call_ms": first_call,
-            "last_warmup_ms": warm_ms,
+            "frame": job.warm_frame,
+            "first_call_ms": job.first_call,
+            "last_warmup_ms": job.warm_ms,
             "note": "first call incl. JIT compilation / on-disk cache load; not in the statistics",
         },
     )
 
-    out = Path(out)
     files = [out / n for n in ("frames.csv", "summary.csv", "histogram.csv", "environment.json")]
+    if loop.skipped:
+        files.append(write_skipped(out / "skipped.csv", sort_skipped(loop.skipped)))
     _write_csv(table, files[0])
     _write_csv(summary, files[1])
     _write_csv(hist, files[2])

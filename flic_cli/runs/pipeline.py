@@ -1,24 +1,29 @@
 """The chain every run uses: frame -> range image -> ground extraction -> clusterer -> labels.
 
-``prepare`` turns a loaded frame into the evaluated point set and its range image (the "No Ground"
-setting drops the ground classes' points by label first); a :class:`Segmenter` runs one method,
-with the chosen ground remover, on a prepared frame. Runs (segment, evaluate, benchmark, sweep)
-differ only in what they do with the labels.
+:func:`prepare` turns a loaded frame into the evaluated point set and its range image (the "No
+Ground" setting drops the ground classes' points by label first); a :class:`Segmenter`, built once
+per run by :func:`build_segmenter`, runs one method with its ground remover on a prepared frame.
+Runs (segment, evaluate, benchmark, sweep) differ only in what they do with the labels.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+import dataclasses
+import warnings
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
 from flic_cli.classes import ground_mask
-from flic_cli.config import build_method, method_ground
+from flic_cli.config import Config
 from flic_cli.errors import FlicInputError
 from flic_cli.io.base import Frame, FrameRef
-from flic_cli.range_image import RangeImage, project_points
+from flic_cli.projection import Projection
+from flic_cli.range_image import RangeImage
 
+#: The paper's two settings: each method after ground extraction (no labels used), or with the
+#: ground classes' points removed by label first.
 SETTINGS = ("ground", "no-ground")
 
 
@@ -53,7 +58,14 @@ class Prepared:
         return out
 
 
-def prepare(frame: Frame, setting: str, projection: dict[str, Any]) -> Prepared:
+def check_setting(setting: str) -> str:
+    """``setting`` if it is one of :data:`SETTINGS`, else a one-line error."""
+    if setting not in SETTINGS:
+        raise FlicInputError(None, f"--setting must be one of {', '.join(SETTINGS)}")
+    return setting
+
+
+def prepare(frame: Frame, setting: str, projection: Projection) -> Prepared:
     """Project a frame for the given setting.
 
     Parameters
@@ -61,10 +73,14 @@ def prepare(frame: Frame, setting: str, projection: dict[str, Any]) -> Prepared:
     frame : a loaded frame.
     setting : ``"ground"`` (all points; methods extract the ground themselves) or ``"no-ground"``
         (the ground classes' points are removed by label, the paper's "No Ground" column).
-    projection : the ``[projection]`` table of the config (width, mode, rows, fov).
+    projection : how a SemanticKITTI scan becomes a range image (Moosmann frames are images).
+
+    Warns
+    -----
+    UserWarning
+        Naming the scan, when ring recovery fails and the spherical projection is used instead.
     """
-    if setting not in SETTINGS:
-        raise FlicInputError(None, f"--setting must be one of {', '.join(SETTINGS)}")
+    check_setting(setting)
     points, labels, keep = frame.points, frame.labels, None
     if setting == "no-ground":
         if labels is None:
@@ -84,15 +100,15 @@ def prepare(frame: Frame, setting: str, projection: dict[str, Any]) -> Prepared:
             ranges.reshape(frame.image.ranges.shape), frame.image.elevation, pix, "native"
         )
     else:
-        image = project_points(
-            points,
-            width=int(projection.get("width", 2048)),
-            mode=str(projection.get("mode", "rings")),
-            rows=int(projection.get("rows", 64)),
-            fov_up_deg=float(projection.get("fov_up_deg", 3.0)),
-            fov_down_deg=float(projection.get("fov_down_deg", -25.0)),
-            keep=keep,
-        )
+        with warnings.catch_warnings():
+            warnings.filterwarnings("ignore", message="ring recovery did not find")
+            image = projection(points, keep)
+        if projection.mode == "rings" and image.projection == "spherical":
+            warnings.warn(
+                f"{frame.ref.path}: ring recovery did not find {projection.rows} rings in scan "
+                "order; this scan uses a spherical projection",
+                stacklevel=2,
+            )
     if keep is not None:
         points, labels = points[keep], labels[keep]
     return Prepared(frame.ref, image, points, labels, _in_file(frame.finite, keep), frame.n_read)
@@ -113,15 +129,19 @@ def _in_file(finite: np.ndarray | None, keep: np.ndarray | None) -> np.ndarray |
 class Segmenter:
     """One method with its ground remover: ``segmenter(image, points) -> (labels, ground)``.
 
+    Built once per run (:func:`build_segmenter`) and sent as it is to worker processes.
+
     Attributes
     ----------
     name : the method variant's name in the config (e.g. ``"flic14"``)
+    kind : the method's kind (``"flic"``, ``"dbscan"``, ...)
     method : the clusterer (see :mod:`flic_cli.methods`)
     ground_name : the remover's name (``"paper"``, ...), None in the "No Ground" setting
     remover : the ground remover (see :mod:`flic_cli.ground`), None in the "No Ground" setting
     """
 
     name: str
+    kind: str
     method: Any
     ground_name: str | None
     remover: Any
@@ -137,41 +157,47 @@ class Segmenter:
 
     def with_param(self, value: float) -> Segmenter:
         """The same segmenter with the method's main parameter (sweeps) set to ``value``."""
-        method = replace(self.method, **{self.method.main_param: value})
-        return replace(self, method=method)
+        from flic_cli.config.component import describe
+
+        param = self.method.main_param
+        try:
+            method = dataclasses.replace(self.method, **{param: value})
+        except (TypeError, ValueError) as exc:
+            raise FlicInputError(None, f"{param} = {value:g}: {describe(exc)}") from None
+        return dataclasses.replace(self, method=method)
 
 
-def make_segmenter(
-    cfg: dict[str, Any], name: str, setting: str, ground_remover: str = "paper"
+#: ``--ground-remover``: ``own`` picks each variant's ``ground`` key; any registered remover name
+#: applies that remover to every method.
+OWN = "own"
+
+
+def build_segmenter(
+    config: Config, name: str, setting: str, ground_remover: str = "paper"
 ) -> Segmenter:
     """Build the segmenter of method variant ``name``.
 
     Parameters
     ----------
-    cfg : the loaded config.
+    config : the loaded config.
     name : a ``[methods.NAME]`` variant.
     setting : ``"ground"`` or ``"no-ground"`` (no remover runs in the latter).
-    ground_remover : ``"paper"`` (every method uses the paper's ground extraction: the paper's
-        protocol), ``"own"`` (each method its own ``ground`` key: Bogoslavskyi uses theirs) or a
-        remover's name.
+    ground_remover : a remover's name (``"paper"``: the paper's protocol applies the paper's
+        extraction to every method) or ``"own"`` (each variant's own ``ground`` key).
     """
-    from flic_cli.config.component import describe
-    from flic_cli.ground import REMOVERS
-
-    method = build_method(cfg, name)
+    spec = config.method(name)
+    check_setting(setting)
     if setting == "no-ground":
-        return Segmenter(name, method, None, None)
-    remover = method_ground(cfg, name) if ground_remover == "own" else ground_remover
-    if remover not in REMOVERS:
-        raise FlicInputError(
-            None, f"unknown ground remover {remover!r} ({' | '.join(REMOVERS)} | own)"
-        )
-    params = dict(cfg.get("ground", {}).get(remover, {}))
-    try:
-        built = REMOVERS[remover](**params)
-    except (TypeError, ValueError) as exc:
-        raise FlicInputError(None, f"[ground.{remover}] {describe(exc)}") from None
-    return Segmenter(name, method, remover, built)
+        return Segmenter(name, spec.kind, spec.method, None, None)
+    remover = spec.ground if ground_remover == OWN else ground_remover
+    return Segmenter(name, spec.kind, spec.method, remover, config.remover(remover))
+
+
+def build_segmenters(
+    config: Config, names: list[str], setting: str, ground_remover: str = "paper"
+) -> list[Segmenter]:
+    """:func:`build_segmenter` for every name."""
+    return [build_segmenter(config, n, setting, ground_remover) for n in names]
 
 
 def resolve_method(method: str, mc: int | None) -> str:
@@ -183,14 +209,13 @@ def resolve_method(method: str, mc: int | None) -> str:
     return "flic0" if method == "flic" else method
 
 
-def parse_methods(text: str, cfg: dict[str, Any]) -> list[str]:
-    """Comma-separated method variant names, checked against the config."""
-    names = [t.strip() for t in text.split(",") if t.strip()]
-    unknown = [n for n in names if n not in cfg.get("methods", {})]
-    if unknown or not names:
-        raise FlicInputError(
-            None,
-            f"unknown method {', '.join(unknown) or '(none)'} "
-            f"(known: {', '.join(cfg.get('methods', {}))})",
-        )
+def parse_methods(text: str | None, config: Config) -> list[str]:
+    """Comma-separated method variant names, checked against the config (None: its defaults)."""
+    if text is None:
+        return list(config.default_methods)
+    names = list(dict.fromkeys(t.strip() for t in text.split(",") if t.strip()))
+    if not names:
+        raise FlicInputError(None, f"--methods is empty (known: {', '.join(config.methods)})")
+    for name in names:
+        config.method(name)
     return names

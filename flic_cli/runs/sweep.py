@@ -8,22 +8,24 @@ on ``--jobs``), writes ``sweep.csv`` and ``sweep.png`` atomically.
 
 from __future__ import annotations
 
-import functools
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 import pandas as pd
-from tqdm import tqdm
 
+from flic_cli.config import Config
 from flic_cli.errors import FlicInputError
 from flic_cli.io.atomic import atomic_write
 from flic_cli.io.base import FrameRef
 from flic_cli.metrics import match_objects, summarize
-from flic_cli.runs.evaluate import load_labelled_frame, percent, select_labelled
-from flic_cli.runs.parallel import imap_frames
-from flic_cli.runs.pipeline import SETTINGS, Segmenter, make_segmenter, prepare
+from flic_cli.projection import Projection
+from flic_cli.runs.evaluate import select_labelled
+from flic_cli.runs.frames import FrameLoop, Skipped, sort_skipped, write_skipped
+from flic_cli.runs.output import check_output_dir
+from flic_cli.runs.pipeline import Segmenter, build_segmenter, check_setting, prepare
+from flic_cli.runs.scoring import load_labelled_frame
+from flic_cli.runs.tables import percent
 
 #: Default sweep range ``(from, to, step)`` of each method kind's main parameter.
 DEFAULT_RANGES: dict[str, tuple[float, float, float]] = {
@@ -73,56 +75,26 @@ def sweep_values(start: float, stop: float, step: float) -> np.ndarray:
     return np.round(np.arange(start, stop + step / 2, step), 6)
 
 
-def method_kind(cfg: dict[str, Any], name: str) -> str:
-    """The ``kind`` of method variant ``name`` (``flic``, ``bogoslavskyi``, ``dbscan``)."""
-    methods = cfg.get("methods", {})
-    if name not in methods:
-        raise FlicInputError(None, f"unknown method {name!r} (known: {', '.join(methods)})")
-    return str(methods[name].get("kind"))
-
-
-@dataclass
-class SweepFrameResult:
-    """Per-object IoUs of one frame at every value: ``ious[v]`` is an ``(M,)`` array."""
-
-    sequence: str
-    frame: int
-    ious: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
-    error: tuple[str | None, str] | None = None
-
-
-def sweep_frame(
-    ref: FrameRef,
-    cfg: dict[str, Any],
-    method: str,
-    setting: str,
-    ground_remover: str,
-    values: tuple[float, ...],
-) -> SweepFrameResult:
-    """Evaluate one method at every value of its main parameter on one frame.
+@dataclass(frozen=True)
+class SweepJob:
+    """One method at every value of its main parameter on a frame (picklable, sent once).
 
     The frame is read and projected once, and (ground setting) its ground extracted once.
-
-    Returns
-    -------
-    SweepFrameResult
-        ``ious`` of shape ``(len(values), objects)``; input errors are returned, not raised.
+    Called on a frame, returns the per-object IoUs, shape ``(values, objects)``.
     """
-    try:
-        frame = load_labelled_frame(ref)
-        prep = prepare(frame, setting, cfg.get("projection", {}))
-        base: Segmenter = make_segmenter(cfg, method, setting, ground_remover)
-        ground = base.extract_ground(prep.image, prep.points)
-        rows = []
-        for value in values:
-            labels = base.with_param(float(value)).method.segment(prep.image, prep.points, ground)
-            rows.append(match_objects(prep.labels, labels).iou)
-        ious = np.vstack(rows) if rows else np.zeros((0, 0))
-        return SweepFrameResult(ref.sequence, ref.frame, ious)
-    except FlicInputError as exc:
-        return SweepFrameResult(
-            ref.sequence, ref.frame, error=(None if exc.path is None else str(exc.path), exc.reason)
-        )
+
+    segmenters: tuple[Segmenter, ...]
+    setting: str
+    projection: Projection
+
+    def __call__(self, ref: FrameRef) -> np.ndarray:
+        prep = prepare(load_labelled_frame(ref), self.setting, self.projection)
+        ground = self.segmenters[0].extract_ground(prep.image, prep.points)
+        rows = [
+            match_objects(prep.labels, s.method.segment(prep.image, prep.points, ground)).iou
+            for s in self.segmenters
+        ]
+        return np.vstack(rows) if rows else np.zeros((0, 0))
 
 
 @dataclass
@@ -135,8 +107,9 @@ class SweepResult:
     param : the swept parameter's name.
     best_value, best_iou_mu : the value with the highest IoU_mu (the lowest such value on ties)
         and that IoU_mu in percent.
-    frames, skipped : frames evaluated, frames without labels left out.
+    frames, missing : frames evaluated, frames without labels left out (``--skip-missing``).
     csv, png : the files written.
+    skipped : bad frames left out (``--skip-bad``, listed in ``skipped.csv``).
     """
 
     table: pd.DataFrame
@@ -144,9 +117,10 @@ class SweepResult:
     best_value: float
     best_iou_mu: float
     frames: int
-    skipped: int
+    missing: int
     csv: Path
     png: Path
+    skipped: list[Skipped]
 
     def line(self) -> str:
         """One line summary."""
@@ -161,7 +135,7 @@ def run_sweep(
     data: Path,
     out: Path,
     method: str,
-    cfg: dict[str, Any],
+    config: Config,
     start: float | None = None,
     stop: float | None = None,
     step: float | None = None,
@@ -172,6 +146,7 @@ def run_sweep(
     jobs: int = 1,
     scheduler: str | None = None,
     skip_missing: bool = False,
+    skip_bad: bool = False,
     progress: bool = True,
 ) -> SweepResult:
     """Sweep a method's main parameter and write ``sweep.csv`` and ``sweep.png`` into ``out``.
@@ -181,57 +156,39 @@ def run_sweep(
     data : labelled SemanticKITTI root or sequence.
     out : output folder.
     method : method variant (``flic0``, ``bogoslavskyi``, ``dbscan``, ...).
-    cfg : loaded config.
+    config : loaded config.
     start, stop, step : the values (defaults per method kind: :data:`DEFAULT_RANGES`).
     setting : ``"no-ground"`` (default: isolates the clusterer) or ``"ground"``.
     sequences, frames : selection.
-    ground_remover : ground extraction of the ground setting (``"paper"`` or ``"own"``).
+    ground_remover : ground extraction of the ground setting (a remover's name or ``"own"``).
     jobs, scheduler : parallelism (see :func:`flic_cli.runs.parallel.imap_frames`).
     skip_missing : leave out frames without ``.label`` instead of failing.
+    skip_bad : go on past frames whose input is bad (listed in ``skipped.csv``).
     progress : show a progress bar.
-
-    Returns
-    -------
-    SweepResult
     """
-    if setting not in SETTINGS:
-        raise FlicInputError(None, f"--setting must be one of {', '.join(SETTINGS)}")
-    kind = method_kind(cfg, method)
-    d_start, d_stop, d_step = DEFAULT_RANGES.get(kind, (None, None, None))
+    check_setting(setting)
+    base = build_segmenter(config, method, setting, ground_remover)
+    d_start, d_stop, d_step = DEFAULT_RANGES.get(base.kind, (None, None, None))
     start = d_start if start is None else start
     stop = d_stop if stop is None else stop
     step = d_step if step is None else step
     if start is None or stop is None or step is None:
         raise FlicInputError(
-            None, f"method kind {kind!r} has no default range: give --from/--to/--step"
+            None, f"method kind {base.kind!r} has no default range: give --from/--to/--step"
         )
     values = sweep_values(float(start), float(stop), float(step))
-    base = make_segmenter(cfg, method, setting, ground_remover)
     param = base.method.main_param
-    for value in values:  # fail on a bad value before any frame is read
-        try:
-            base.with_param(float(value))
-        except (TypeError, ValueError) as exc:
-            raise FlicInputError(None, f"{param} = {value:g}: {exc}") from None
+    # every value is validated here, before any frame is read
+    job = SweepJob(tuple(base.with_param(float(v)) for v in values), setting, config.projection)
+    refs, missing, folders = select_labelled(data, sequences, frames, skip_missing)
+    out = check_output_dir(Path(out), folders)
 
-    refs, skipped = select_labelled(data, sequences, frames, skip_missing)
-    worker = functools.partial(
-        sweep_frame,
-        cfg=cfg,
-        method=method,
-        setting=setting,
-        ground_remover=ground_remover,
-        values=tuple(float(v) for v in values),
-    )
     per_frame: dict[tuple[str, int], np.ndarray] = {}
-    with tqdm(total=len(refs), desc=f"sweep {method}", unit="frame", disable=not progress) as bar:
-        for result in imap_frames(worker, refs, jobs, scheduler):
-            if result.error is not None:
-                raise FlicInputError(result.error[0], result.error[1])
-            per_frame[(result.sequence, result.frame)] = result.ious
-            bar.update(1)
+    loop = FrameLoop(job, refs, jobs, scheduler, skip_bad, f"sweep {method}", progress)
+    for ref, ious in loop:
+        per_frame[(ref.sequence, ref.frame)] = ious
 
-    ordered = [per_frame[(r.sequence, r.frame)] for r in refs]
+    ordered = [per_frame[k] for k in ((r.sequence, r.frame) for r in refs) if k in per_frame]
     ious = np.hstack(ordered) if ordered else np.zeros((values.size, 0))
     rows = []
     for k, value in enumerate(values):
@@ -248,7 +205,6 @@ def run_sweep(
     raw = np.array([summarize(ious[k])["iou_mu"] for k in range(values.size)], dtype=float)
     best = int(np.nanargmax(raw)) if np.isfinite(raw).any() else 0
 
-    out = Path(out)
     csv_path, png_path = out / "sweep.csv", out / "sweep.png"
     with atomic_write(csv_path) as tmp:
         table.to_csv(tmp, index=False)
@@ -261,15 +217,19 @@ def run_sweep(
         best,
         png_path,
         xlabel=PARAM_LABELS.get(param, param),
-        title=f"{method}, {setting}: {len(refs)} frames, {int(table['objects'].iloc[0])} objects",
+        title=f"{method}, {setting}: {len(per_frame)} frames, "
+        f"{int(table['objects'].iloc[0])} objects",
     )
+    if loop.skipped:
+        write_skipped(out / "skipped.csv", sort_skipped(loop.skipped))
     return SweepResult(
         table,
         param,
         float(values[best]),
         float(table["iou_mu"].iloc[best]),
-        len(refs),
-        skipped,
+        len(per_frame),
+        missing,
         csv_path,
         png_path,
+        sort_skipped(loop.skipped),
     )

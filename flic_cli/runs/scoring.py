@@ -1,0 +1,176 @@
+"""The per-frame worker of ``flic evaluate`` and ``flic sweep-threshold``.
+
+:class:`ScoreJob` holds what a run sends to its workers once (the segmenters built from the config
+and the projection); called on a frame reference it reads the frame once, prepares it once per
+setting, extracts each ground mask once, runs every method and scores the labels
+(:func:`flic_cli.metrics.match_objects`, :func:`flic_cli.metrics.segmentation_stats`). It returns
+small per-object and per-frame records (:class:`FrameScores`), never point clouds.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from flic_cli.classes import class_name
+from flic_cli.errors import FlicInputError
+from flic_cli.io import read_scan
+from flic_cli.io.base import Frame, FrameRef
+from flic_cli.metrics import distance_band, match_objects, segmentation_stats
+from flic_cli.projection import Projection
+from flic_cli.runs.pipeline import Prepared, Segmenter, prepare
+
+#: Columns of the per-object records (``per_object.csv``).
+OBJECT_COLUMNS: tuple[str, ...] = (
+    "method",
+    "setting",
+    "sequence",
+    "frame",
+    "instance",
+    "class",
+    "class_name",
+    "points",
+    "distance_m",
+    "band",
+    "cluster",
+    "overlap",
+    "iou",
+)
+
+#: Columns of the per-frame records (``per_frame.csv``).
+FRAME_COLUMNS: tuple[str, ...] = (
+    "method",
+    "setting",
+    "sequence",
+    "frame",
+    "points",
+    "clusters",
+    "objects",
+    "over_segmented",
+    "under_segmented",
+    "seconds",
+)
+
+
+@dataclass
+class FrameScores:
+    """One frame's records as column lists (keys :data:`OBJECT_COLUMNS`, :data:`FRAME_COLUMNS`)."""
+
+    sequence: str
+    frame: int
+    objects: dict[str, list] = field(default_factory=lambda: {c: [] for c in OBJECT_COLUMNS})
+    frames: dict[str, list] = field(default_factory=lambda: {c: [] for c in FRAME_COLUMNS})
+
+    def tables(self) -> dict[str, tuple[tuple[str, ...], dict[str, list]]]:
+        """The records by part name, with their columns (the ``frames`` part last)."""
+        return {"objects": (OBJECT_COLUMNS, self.objects), "frames": (FRAME_COLUMNS, self.frames)}
+
+
+def load_labelled_frame(ref: FrameRef) -> Frame:
+    """Read a SemanticKITTI frame with its labels from its reference alone (in a worker).
+
+    Raises
+    ------
+    FlicInputError
+        When the frame is not a SemanticKITTI scan with a ``.label`` file, or cannot be read.
+    """
+    if ref.format != "semantickitti" or ref.label_path is None:
+        raise FlicInputError(
+            ref.path,
+            "has no ground-truth labels: evaluation needs labelled SemanticKITTI data "
+            "(labels/<frame>.label)",
+        )
+    scan = read_scan(ref.path, ref.label_path)
+    return Frame(ref, scan.points, scan.labels, finite=scan.finite)
+
+
+@dataclass(frozen=True)
+class ScoreJob:
+    """Score methods on a frame, in one or both settings (picklable: sent to workers once).
+
+    Attributes
+    ----------
+    segmenters : per setting (``"no-ground"``, ``"ground"``), the segmenters to run.
+    projection : how scans become range images.
+    """
+
+    segmenters: tuple[tuple[str, tuple[Segmenter, ...]], ...]
+    projection: Projection
+
+    def __call__(self, ref: FrameRef) -> FrameScores:
+        frame = load_labelled_frame(ref)
+        out = FrameScores(ref.sequence, ref.frame)
+        for setting, segmenters in self.segmenters:
+            prep = prepare(frame, setting, self.projection)
+            grounds = GroundCache(prep)
+            for seg in segmenters:
+                ground, ground_seconds = grounds.get(seg)
+                start = time.perf_counter()
+                labels = seg.method.segment(prep.image, prep.points, ground)
+                seconds = time.perf_counter() - start + ground_seconds
+                add_scores(out, seg.name, setting, prep, labels, seconds)
+        return out
+
+
+class GroundCache:
+    """Each remover's ground mask of one prepared frame, extracted once and timed.
+
+    Its time is counted in every method that uses it (as if each method ran alone).
+    """
+
+    def __init__(self, prep: Prepared) -> None:
+        self.prep = prep
+        self.masks: dict[str | None, tuple[Any, float]] = {}
+
+    def get(self, seg: Segmenter) -> tuple[np.ndarray | None, float]:
+        """The ground mask of ``seg``'s remover (None without one) and its extraction time."""
+        if seg.ground_name not in self.masks:
+            start = time.perf_counter()
+            mask = seg.extract_ground(self.prep.image, self.prep.points)
+            self.masks[seg.ground_name] = (mask, time.perf_counter() - start)
+        return self.masks[seg.ground_name]
+
+
+def add_scores(
+    out: FrameScores,
+    method: str,
+    setting: str,
+    prep: Prepared,
+    labels: np.ndarray,
+    seconds: float,
+) -> None:
+    """Append one method's per-object and per-frame records of one prepared frame."""
+    assert prep.labels is not None  # load_labelled_frame guarantees labels
+    matches = match_objects(prep.labels, labels, prep.points)
+    stats = segmentation_stats(prep.labels, labels)
+    n = len(matches)
+    obj = out.objects
+    obj["method"] += [method] * n
+    obj["setting"] += [setting] * n
+    obj["sequence"] += [prep.ref.sequence] * n
+    obj["frame"] += [prep.ref.frame] * n
+    obj["instance"] += matches.instance.tolist()
+    obj["class"] += matches.semantic.tolist()
+    obj["class_name"] += [class_name(c) for c in matches.semantic]
+    obj["points"] += matches.n_points.tolist()
+    obj["distance_m"] += np.round(matches.distance, 3).tolist()
+    obj["band"] += distance_band(matches.distance).tolist()
+    obj["cluster"] += matches.cluster.tolist()
+    obj["overlap"] += matches.overlap.tolist()
+    obj["iou"] += matches.iou.tolist()
+    for key, value in (
+        ("method", method),
+        ("setting", setting),
+        ("sequence", prep.ref.sequence),
+        ("frame", prep.ref.frame),
+        ("points", int(prep.points.shape[0])),
+        ("clusters", stats["clusters"]),
+        ("objects", stats["objects"]),
+        ("over_segmented", stats["over_segmented"]),
+        ("under_segmented", stats["under_segmented"]),
+        ("seconds", round(seconds, 6)),
+    ):
+        out.frames[key].append(value)
