@@ -15,9 +15,9 @@ from typer.testing import CliRunner
 from flic_cli.cli import app
 from flic_cli.errors import FlicInputError
 from flic_cli.metrics import IOU_THRESHOLDS
+from flic_cli.runs.parallel import imap_frames
 from flic_cli.runs.scoring import FRAME_COLUMNS, OBJECT_COLUMNS
 from flic_cli.runs.tables import SCORE_COLUMNS, TABLE_COLUMNS
-from flic_cli.runs.parallel import imap_frames
 
 runner = CliRunner()
 METHODS = "bogoslavskyi,flic1,flic14"
