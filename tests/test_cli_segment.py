@@ -174,3 +174,31 @@ def test_predictions_hold_one_label_per_stored_point_with_nan_points(
     pred = read_predictions(tmp_path / "out", "00", 0, n_points=raw.shape[0])
     assert pred.shape == (raw.shape[0],)
     assert np.all(pred[bad] == 0) and pred.max() > 0
+
+
+def test_spherical_fallback_is_named_for_every_frame_and_counted(small_sample, tmp_path, capsys):
+    """A scan whose points are not in sensor order cannot give rings: each such frame gets a
+    warning naming its file, and the summary counts them."""
+    import shutil
+
+    from flic_cli.cli import main
+
+    root = tmp_path / "kitti"
+    shutil.copytree(small_sample.kitti_root, root)
+    rng = np.random.default_rng(0)
+    for frame in (0, 2):
+        path = root / "sequences" / "00" / "velodyne" / f"{frame:06d}.bin"
+        raw = np.fromfile(path, dtype="<f4").reshape(-1, 4)
+        order = rng.permutation(raw.shape[0])
+        raw[order].tofile(path)
+        lab = root / "sequences" / "00" / "labels" / f"{frame:06d}.label"
+        np.fromfile(lab, dtype="<u4")[order].tofile(lab)
+    with pytest.raises(SystemExit) as info:
+        main(["segment", str(root), "--out", str(tmp_path / "out")])
+    captured = capsys.readouterr()
+    assert info.value.code == 0, captured.err
+    warned = [ln for ln in captured.err.splitlines() if "ring recovery" in ln]
+    assert [ln.split(":")[1].strip() for ln in warned] == [
+        str(root / "sequences" / "00" / "velodyne" / f"{f:06d}.bin") for f in (0, 2)
+    ]
+    assert "2 frame(s) projected spherically" in captured.out

@@ -194,8 +194,15 @@ def run_evaluate(
     # 4. score every frame, storing each as it finishes
     parts = out / PARTS
     loop = FrameLoop(job, todo, jobs, scheduler, skip_bad, "evaluate", progress, resumed, len(refs))
-    for ref, scores in loop:
-        write_part(parts, ref.sequence, ref.frame, scores.tables())
+    try:
+        for ref, scores in loop:
+            write_part(parts, ref.sequence, ref.frame, scores.tables())
+    except FlicInputError as exc:
+        raise FlicInputError(
+            exc.path,
+            f"{exc.reason} (finished frames are kept in {parts} for --resume; --skip-bad goes "
+            "on past bad frames)",
+        ) from None
     # 5. the tables, from the stored records of the selected frames
     bad = {(s.sequence, s.frame) for s in loop.skipped}
     keys = [(r.sequence, r.frame) for r in refs if (r.sequence, r.frame) not in bad]
