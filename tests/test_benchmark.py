@@ -198,3 +198,22 @@ def test_benchmark_bad_input(small_sample, tmp_path, args, message):
     assert result.exit_code == 2
     assert message in result.output
     assert "Traceback" not in result.output
+
+
+def test_speedups_on_few_frames_are_marked_as_indications(small_sample, tmp_path):
+    from flic_cli.config import load_config
+    from flic_cli.runs.benchmark import run_benchmark
+
+    result = run_benchmark(
+        small_sample.moosmann_log,
+        tmp_path / "b",
+        ["flic0", "dbscan"],
+        load_config(),
+        warmup=1,
+        dbscan_every=2,
+        plots=False,
+        progress=False,
+    )
+    text = result.report()
+    assert "~: fewer than 30 frames timed (flic0 n = 3, dbscan n = 2)" in text
+    assert "e+" not in text.split("speed-up")[1]  # no exponents in the ratios

@@ -67,6 +67,9 @@ from flic_cli.runs.frames import FrameLoop, sort_skipped, write_skipped
 from flic_cli.runs.output import check_output_dir
 from flic_cli.runs.pipeline import Segmenter, build_segmenters, prepare
 
+#: Speed-ups measured on fewer frames than this are printed as an indication only.
+FEW_FRAMES = 30
+
 #: The stages timed besides the methods (file reading, projection to the range image).
 STAGES = ("read", "project")
 
@@ -127,6 +130,34 @@ class BenchmarkResult:
     files: list[Path] = field(default_factory=list)
     notes: list[str] = field(default_factory=list)
 
+    def _speedups(self, methods: list[str]) -> list[str]:
+        """The speed-up matrix; ratios over fewer than :data:`FEW_FRAMES` common frames get two
+        significant figures and a ``~``, with their frame counts below."""
+        by_method = self.summary.set_index("method")
+        n = self.frames[self.frames["method"].isin(methods)].groupby("method")["index"].nunique()
+        few = {m for m in methods if n.get(m, 0) < FEW_FRAMES}
+        cells = {}
+        for a in methods:
+            cells[a] = {}
+            for b in methods:
+                value = by_method.loc[a, f"speedup_vs_{b}"]
+                if not np.isfinite(value):
+                    cells[a][b] = "-"
+                elif a in few or b in few:
+                    cells[a][b] = "~" + _significant(value, 2)
+                else:
+                    cells[a][b] = _significant(value, 3)
+        table = pd.DataFrame(cells).T.loc[methods, methods]
+        lines = [
+            "speed-up (row vs column: column's median / row's median, on the frames both were "
+            "timed on):",
+            table.to_string(),
+        ]
+        if few:
+            counts = ", ".join(f"{m} n = {int(n.get(m, 0))}" for m in methods if m in few)
+            lines.append(f"~: fewer than {FEW_FRAMES} frames timed ({counts}), an indication only")
+        return lines
+
     def report(self) -> str:
         """The lines ``flic benchmark`` prints: environment, warm-up, notes, summary, files."""
         env = self.environment
@@ -147,15 +178,14 @@ class BenchmarkResult:
         )
         methods = self.summary.loc[self.summary["kind"] == "method", "method"].tolist()
         if len(methods) > 1:
-            sp = self.summary.set_index("method").loc[methods, [f"speedup_vs_{m}" for m in methods]]
-            sp.columns = methods
-            sp.index.name = None
-            lines.append(
-                "speed-up (row vs column: column's median / row's median on common frames):"
-            )
-            lines.append(sp.to_string(float_format=lambda x: f"{x:.3g}"))
+            lines += self._speedups(methods)
         lines.append(f"wrote {', '.join(p.name for p in self.files)} -> {self.out}")
         return "\n".join(lines)
+
+
+def _significant(value: float, digits: int) -> str:
+    """``value`` rounded to ``digits`` significant figures, without an exponent (454, 0.0071)."""
+    return np.format_float_positional(value, precision=digits, fractional=False, trim="-")
 
 
 def _timed(func: Callable[[], Any], repeat: int) -> tuple[Any, int]:
