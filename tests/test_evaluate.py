@@ -154,11 +154,12 @@ def test_jobs_2_equals_serial(reference: Path, sample_root: Path, tmp_path: Path
 def test_dask_local_cluster_equals_serial(
     reference: Path, sample_root: Path, tmp_path: Path
 ) -> None:
+    """Two worker processes (not threads), as on a cluster: the segmenters travel pickled."""
     distributed = pytest.importorskip("distributed", reason="dask.distributed not installed")
     with distributed.LocalCluster(
-        n_workers=1,
+        n_workers=2,
         threads_per_worker=1,
-        processes=False,
+        processes=True,
         protocol="tcp://",
         host="127.0.0.1",
         dashboard_address=None,
@@ -329,3 +330,71 @@ def test_imap_frames_dask_window() -> None:
     ) as cluster:
         got = list(imap_frames(_square, range(25), scheduler=cluster.scheduler_address))
     assert sorted(got) == [x * x for x in range(25)]
+
+
+def test_dask_cluster_started_from_the_command_line(
+    reference: Path, sample_root: Path, tmp_path: Path
+) -> None:
+    """The README's multi-machine recipe on one machine: `dask scheduler` and `dask worker`
+    started as commands, `flic evaluate --scheduler` sends the frames to them."""
+    import json
+    import subprocess
+    import time
+
+    pytest.importorskip("distributed", reason="dask.distributed not installed")
+    dask = Path(sys.executable).parent / "dask"
+    file = tmp_path / "scheduler.json"
+    procs = [
+        subprocess.Popen(
+            [
+                dask,
+                "scheduler",
+                "--host",
+                "127.0.0.1",
+                "--port",
+                "0",
+                "--no-dashboard",
+                "--scheduler-file",
+                file,
+            ],
+            stdout=subprocess.DEVNULL,
+            stderr=subprocess.DEVNULL,
+        )
+    ]
+    try:
+        for _ in range(300):
+            if file.is_file() and file.stat().st_size:
+                break
+            time.sleep(0.1)
+        address = json.loads(file.read_text())["address"]
+        procs.append(
+            subprocess.Popen(
+                [dask, "worker", address, "--nworkers", "2", "--nthreads", "1", "--no-dashboard"],
+                stdout=subprocess.DEVNULL,
+                stderr=subprocess.DEVNULL,
+            )
+        )
+        result = _evaluate(sample_root, tmp_path / "cli", "--scheduler", address)
+    finally:
+        for proc in reversed(procs):
+            proc.terminate()
+            proc.wait(timeout=30)
+    assert result.exit_code == 0, result.output
+    _assert_same_tables(reference, tmp_path / "cli")
+
+
+def test_estimate_line() -> None:
+    from flic_cli.runs.evaluate import estimate_line
+    from flic_cli.runs.scoring import FrameScores
+
+    timing = []
+    for wall, dbscan in ((2.0, 1.5), (1.0, 0.5), (1.2, 0.6)):
+        scores = FrameScores("00", 0)
+        scores.frames["method"] += ["flic0", "dbscan"]
+        scores.frames["seconds"] += [0.002, dbscan]
+        timing.append((wall, scores))
+    line = estimate_line(timing, 1000, jobs=4, scheduler=None)
+    # median frame 1.2 s, dbscan 0.6 s, flic0 2 ms, the rest the median of 0.498, 0.498, 0.598
+    assert line.startswith("estimate from 3 frame(s): 1.2 s per frame (flic0 2 ms, dbscan 600 ms;")
+    assert "scoring 500 ms) x 1000 frames = 20.0 min of one worker / 4 processes = 5.0 min" in line
+    assert "dask worker threads" in estimate_line(timing, 10, jobs=1, scheduler="tcp://x:1")

@@ -144,6 +144,7 @@ def evaluate(
             skip_missing=skip_missing,
             skip_bad=skip_bad,
             on_start=started,
+            on_estimate=lambda line: typer.echo(line, err=True),
         )
     except KeyboardInterrupt:
         _interrupted(out, resumable=True)

@@ -21,10 +21,12 @@ for ``--resume``.
 from __future__ import annotations
 
 import json
+import time
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import pandas as pd
 
 from flic_cli.config import Config
@@ -33,8 +35,9 @@ from flic_cli.io import atomic_write, open_dataset
 from flic_cli.io.base import FrameRef
 from flic_cli.runs.frames import FrameLoop, Skipped, sort_skipped, write_skipped
 from flic_cli.runs.output import check_output_dir
+from flic_cli.runs.parallel import resolve_jobs
 from flic_cli.runs.pipeline import build_segmenters
-from flic_cli.runs.scoring import FRAME_COLUMNS, OBJECT_COLUMNS, ScoreJob
+from flic_cli.runs.scoring import FRAME_COLUMNS, OBJECT_COLUMNS, FrameScores, ScoreJob
 from flic_cli.runs.store import PARTS, open_store, read_parts, write_part
 from flic_cli.runs.tables import all_tables, frame_dtypes, object_dtypes
 
@@ -44,6 +47,57 @@ EVAL_SETTINGS: dict[str, tuple[str, ...]] = {
     "ground": ("ground",),
     "both": ("no-ground", "ground"),
 }
+
+
+#: Frames evaluated in this process first, timed, for the estimate of the whole run.
+CALIBRATION_FRAMES = 3
+
+
+def estimate_line(
+    timing: list[tuple[float, FrameScores]], remaining: int, jobs: int, scheduler: str | None
+) -> str:
+    """How long the rest of a run takes: frames x measured cost per frame, per worker.
+
+    Parameters
+    ----------
+    timing : (wall seconds, records) of each frame evaluated so far in this process.
+    remaining : frames still to evaluate.
+    jobs, scheduler : where they run (a dask cluster's size is not known here: the line gives
+        the worker time to divide by it).
+    """
+    per_frame = float(np.median([t for t, _ in timing]))  # the median: the first frame
+    methods: dict[str, list[float]] = {}  # also loads the compiled kernels
+    for _, scores in timing:
+        for name, seconds in zip(scores.frames["method"], scores.frames["seconds"], strict=True):
+            methods.setdefault(name, []).append(seconds)
+    methods = {m: [float(np.median(t)) * len(t) / len(timing)] for m, t in methods.items()}
+    cost = {m: t[0] for m, t in methods.items()}
+    other = float(np.median([max(t - sum(r.frames["seconds"]), 0.0) for t, r in timing]))
+    parts = ", ".join(f"{m} {_duration(t)}" for m, t in cost.items())
+    total = per_frame * remaining
+    line = (
+        f"estimate from {len(timing)} frame(s): {_duration(per_frame)} per frame ({parts}; "
+        f"reading, projection, ground and scoring {_duration(other)}) x {remaining} frames = "
+        f"{_duration(total)} of one worker"
+    )
+    if scheduler is not None:
+        return line + "; divide by the number of dask worker threads"
+    workers = resolve_jobs(jobs)
+    return line + (f" / {workers} processes = {_duration(total / workers)}" if workers > 1 else "")
+
+
+def _duration(seconds: float) -> str:
+    """``0.8 ms``, ``1.2 s``, ``3.4 min``, ``2.1 h``."""
+    def two(value: float) -> str:
+        return np.format_float_positional(value, precision=2, fractional=False, trim="-")
+
+    if seconds < 1.0:
+        return f"{two(1000.0 * seconds)} ms"
+    if seconds < 120.0:
+        return f"{two(seconds)} s"
+    if seconds < 7200.0:
+        return f"{seconds / 60.0:.1f} min"
+    return f"{seconds / 3600.0:.1f} h"
 
 
 @dataclass
@@ -144,6 +198,7 @@ def run_evaluate(
     skip_bad: bool = False,
     progress: bool = True,
     on_start: Any = None,
+    on_estimate: Any = None,
 ) -> EvaluateResult:
     """Evaluate methods on every selected labelled frame and write the tables to ``out``.
 
@@ -165,6 +220,8 @@ def run_evaluate(
     progress : show a progress bar.
     on_start : called with (frames selected, frames already done, frames without labels) before
         the work starts (the CLI prints a line).
+    on_estimate : called with a line estimating the run's duration, measured on its first
+        :data:`CALIBRATION_FRAMES` frames, before the others start.
 
     Raises
     ------
@@ -191,11 +248,34 @@ def run_evaluate(
     resumed = len(refs) - len(todo)
     if on_start is not None:
         on_start(len(refs), resumed, missing)
-    # 4. score every frame, storing each as it finishes
+    # 4. score every frame, storing each as it finishes; the first few in this process, timed,
+    #    for an estimate of the whole run before the rest starts
     parts = out / PARTS
-    loop = FrameLoop(job, todo, jobs, scheduler, skip_bad, "evaluate", progress, resumed, len(refs))
+    calibrate, rest = todo[:CALIBRATION_FRAMES], todo[CALIBRATION_FRAMES:]
+    loops = [
+        FrameLoop(job, calibrate, 1, None, skip_bad, "evaluate", progress, resumed, len(refs)),
+        FrameLoop(
+            job,
+            rest,
+            jobs,
+            scheduler,
+            skip_bad,
+            "evaluate",
+            progress,
+            resumed + len(calibrate),
+            len(refs),
+        ),
+    ]
+    timing: list[tuple[float, FrameScores]] = []
     try:
-        for ref, scores in loop:
+        start = time.perf_counter()
+        for ref, scores in loops[0]:
+            timing.append((time.perf_counter() - start, scores))
+            write_part(parts, ref.sequence, ref.frame, scores.tables())
+            start = time.perf_counter()
+        if timing and rest and on_estimate is not None:
+            on_estimate(estimate_line(timing, len(rest), jobs, scheduler))
+        for ref, scores in loops[1]:
             write_part(parts, ref.sequence, ref.frame, scores.tables())
     except FlicInputError as exc:
         raise FlicInputError(
@@ -203,12 +283,13 @@ def run_evaluate(
             f"{exc.reason} (finished frames are kept in {parts} for --resume; --skip-bad goes "
             "on past bad frames)",
         ) from None
+    skipped = loops[0].skipped + loops[1].skipped
     # 5. the tables, from the stored records of the selected frames
-    bad = {(s.sequence, s.frame) for s in loop.skipped}
+    bad = {(s.sequence, s.frame) for s in skipped}
     keys = [(r.sequence, r.frame) for r in refs if (r.sequence, r.frame) not in bad]
     files = _write_tables(out, parts, keys, methods, settings)
-    if loop.skipped:
-        files.append(write_skipped(out / "skipped.csv", sort_skipped(loop.skipped)))
+    if skipped:
+        files.append(write_skipped(out / "skipped.csv", sort_skipped(skipped)))
     table = pd.read_csv(out / "table.csv")
     return EvaluateResult(
         table,
@@ -217,7 +298,7 @@ def run_evaluate(
         len(keys),
         resumed,
         missing,
-        sort_skipped(loop.skipped),
+        sort_skipped(skipped),
         files,
     )
 
