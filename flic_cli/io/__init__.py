@@ -40,6 +40,7 @@ from flic_cli.io.semantickitti import (
     write_label,
     write_poses,
     write_predictions,
+    write_times,
 )
 
 __all__ = [
@@ -74,6 +75,7 @@ __all__ = [
     "write_png_range",
     "write_poses",
     "write_predictions",
+    "write_times",
 ]
 
 
