@@ -235,10 +235,15 @@ def _temp_beside(out: Path) -> tuple[Path, Path | None]:
         raise FlicInputError(out, f"cannot be created ({exc.strerror})") from None
     try:
         tmp = _fresh_dir(parent, f".{out.name}.tmp-")
+    except PermissionError:
+        _remove(created)
+        raise FlicInputError(
+            out, f"cannot be written: its folder {parent} is not writable"
+        ) from None
     except OSError as exc:
         _remove(created)
         raise FlicInputError(
-            out, f"cannot be written: its folder {parent} is not writable ({exc.strerror})"
+            out, f"cannot be written: no folder can be made in {parent} ({exc.strerror})"
         ) from None
     return tmp, created
 
