@@ -235,3 +235,24 @@ def test_the_sample_files_are_these_renders(small_sample) -> None:
     np.testing.assert_allclose(loaded.elevation, frame.image.elevation, atol=1e-6)
     sem, inst = small_sample.moosmann_truth(k)
     assert np.array_equal(sem, frame.semantic) and np.array_equal(inst, frame.instance)
+
+
+def test_the_package_docstring_example_runs() -> None:
+    """The example of ``flic_cli.sample``'s docstring: two people 1 m apart and a car."""
+    import textwrap
+
+    import flic_cli.sample
+
+    lines = flic_cli.sample.__doc__.split("a car 20 m ahead::\n", 1)[1].splitlines()
+    block = []
+    for line in lines:
+        if line and not line.startswith("    "):
+            break
+        block.append(line)
+    namespace: dict = {}
+    exec(textwrap.dedent("\n".join(block)), namespace)
+    points, labels = namespace["points"], namespace["labels"]
+    assert set(np.unique(labels >> 16)) == {0, 1, 2, 3}
+    assert namespace["image"].shape == (64, 870)
+    assert set(np.unique(namespace["instance"])) == {0, 1, 2, 3}
+    assert points.shape[0] == labels.shape[0]

@@ -256,3 +256,55 @@ def test_io_float_formats(tmp_path) -> None:
     assert (tmp_path / "c.txt").read_text().startswith("Tr: 1.000000e+00 0.000000e+00")
     write_times(tmp_path / "t.txt", np.array([0.0, 0.1, 12.5]))
     assert (tmp_path / "t.txt").read_text() == "0.000000e+00\n1.000000e-01\n1.250000e+01\n"
+
+
+# ---------------------------------------------------------------------------------------------
+# ensure_sample
+# ---------------------------------------------------------------------------------------------
+
+
+def test_ensure_sample_replaces_a_sample_of_other_parameters(tmp_path, monkeypatch) -> None:
+    from flic_cli.sample import ensure_sample
+
+    target = tmp_path / "cache"
+    monkeypatch.setenv("FLIC_SAMPLE_DIR", str(target))
+    ensure_sample(frames=2, seed=0)
+    paths = ensure_sample(frames=1, seed=3)
+    assert (target / ".complete").read_text() == "seed=3 frames=1 kitti_width=2048\n"
+    assert entries(paths.kitti_sequence / "velodyne") == ["000000.bin"]
+    assert entries(tmp_path) == ["cache"]
+
+
+def test_ensure_sample_reuses_a_cache_written_before_the_split(tmp_path, monkeypatch) -> None:
+    """A cache holding the same files and marker (as the former single module wrote them)."""
+    from flic_cli.sample import ensure_sample
+
+    target = tmp_path / "cache"
+    monkeypatch.setenv("FLIC_SAMPLE_DIR", str(target))
+    write_sample(target, frames=1)
+    (target / ".complete").write_text("seed=0 frames=1 kitti_width=2048\n")
+    stamp = (target / "moosmann" / "scan00000.png").stat().st_mtime_ns
+    ensure_sample(frames=1, seed=0)
+    assert (target / "moosmann" / "scan00000.png").stat().st_mtime_ns == stamp
+
+
+def test_ensure_sample_refuses_a_folder_of_other_files(tmp_path, monkeypatch) -> None:
+    from flic_cli.sample import ensure_sample
+
+    (tmp_path / "mine.txt").write_text("keep me\n")
+    monkeypatch.setenv("FLIC_SAMPLE_DIR", str(tmp_path))
+    with pytest.raises(FlicInputError, match="other files than a flic sample"):
+        ensure_sample(frames=1)
+    assert entries(tmp_path) == ["mine.txt"]
+
+
+def test_a_link_to_a_folder_receives_the_sample(tmp_path) -> None:
+    real = tmp_path / "real"
+    real.mkdir()
+    (tmp_path / "link").symlink_to(real)
+    paths = write_sample(tmp_path / "link", frames=1)
+    assert (tmp_path / "link").is_symlink()
+    assert entries(real) == ["moosmann", "semantickitti"]
+    assert paths.kitti_root == tmp_path / "link" / "semantickitti"
+    write_sample(tmp_path / "link", frames=1, seed=2)  # replaced through the link
+    assert (tmp_path / "link").is_symlink() and entries(tmp_path) == ["link", "real"]

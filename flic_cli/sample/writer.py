@@ -270,7 +270,7 @@ def _commit(tmp: Path, out: Path) -> None:
     old = None
     if out.is_dir() and next(out.iterdir(), None) is not None:
         old = _fresh_dir(out.parent, f".{out.name}.old-")
-        os.replace(out, old)  # an empty folder is replaced by the rename
+        os.replace(out, old)  # a rename replaces an empty folder (old, and out when empty)
     try:
         os.replace(tmp, out)
     except OSError:
@@ -296,8 +296,7 @@ def _write_atomically(
     except OSError as exc:
         _remove(tmp)
         _remove(created)
-        where = exc.filename or tmp
-        raise FlicInputError(out, f"writing the sample failed: {where}: {exc.strerror}") from None
+        raise FlicInputError(out, f"writing the sample failed ({exc.strerror})") from None
     except BaseException:
         _remove(tmp)
         _remove(created)
@@ -349,10 +348,12 @@ def write_sample(
     """
     out = Path(out)
     _check_parameters(frames, seed, kitti_width)
-    _check_out(out)
-    tmp, created, truth = _write_atomically(out, frames, seed, kitti_width)
+    # A link to a folder: the sample goes into the folder, the link stays.
+    real = out.resolve() if out.is_symlink() else out
+    _check_out(real)
+    tmp, created, truth = _write_atomically(real, frames, seed, kitti_width)
     try:
-        _commit(tmp, out)
+        _commit(tmp, real)
     except OSError as exc:
         _remove(tmp)
         _remove(created)
@@ -395,6 +396,7 @@ def ensure_sample(frames: int = 20, seed: int = 0) -> SamplePaths:
         content).
     """
     target = default_sample_dir()
+    target = target.resolve() if target.is_symlink() else target
     stamp = f"seed={seed} frames={frames} kitti_width=2048\n"
     marker = target / ".complete"
 
