@@ -9,13 +9,14 @@ import pytest
 from PIL import Image
 
 from flic_cli import sample
+from flic_cli.classes import CLASS_NAMES
+from flic_cli.classes import THING_CLASSES as THINGS
 from flic_cli.ground import paper_ground
 from flic_cli.io import open_dataset
 from flic_cli.range_image import project_points
 
 FRAMES = 3
-GROUND = (40, 44, 48, 49, 60, 72)
-THINGS = (10, 11, 13, 15, 16, 18, 20, 30, 31, 32, *range(252, 260))
+ID = {name: cid for cid, name in CLASS_NAMES.items()}
 
 
 @pytest.fixture(scope="module")
@@ -103,7 +104,7 @@ def test_labels(written: sample.SamplePaths) -> None:
     for k in range(FRAMES):
         pts, labels = _read(written, k)
         sem, inst = labels & 0xFFFF, labels >> 16
-        assert np.any(sem == 40) and np.any(sem == 10)
+        assert np.any(sem == ID["road"]) and np.any(sem == ID["car"])
         assert np.all(sem > 0)
         assert not np.any(inst[~np.isin(sem, THINGS)])
         assert np.all(inst[np.isin(sem, THINGS)] > 0)
@@ -153,7 +154,7 @@ def test_moosmann_geometry_matches_kitti() -> None:
         r, sem, _ = sample.cast(
             scene, sample.HDL64_PITCH_DEG, az, np.random.default_rng(1), vehicle
         )
-        rows, cols = np.nonzero(sem == 40)
+        rows, cols = np.nonzero(sem == ID["road"])
         assert rows.size > 500
         p = np.radians(sample.HDL64_PITCH_DEG)[rows]
         expect = sample.SENSOR_HEIGHT_M / (np.sin(p) + slope * np.cos(p) * np.cos(az[cols]))
@@ -196,7 +197,7 @@ def test_car_roofs(written: sample.SamplePaths) -> None:
         sem = sem.reshape(img.shape)
         z = img.heights()
         r = img.ranges
-        car = (sem == 10) & (r > 0)
+        car = (sem == ID["car"]) & (r > 0)
         high = car & (z > -0.4)
         assert np.any(high)
         # Vertically adjacent roof pixels: same height, different range -> horizontal surface.
@@ -210,16 +211,18 @@ def test_car_roofs(written: sample.SamplePaths) -> None:
 def test_instances_and_scene_content() -> None:
     scene = sample.make_scene(0, 0)
     classes = {p.semantic for p in [*scene.boxes, *scene.cylinders]}
-    assert {50, 51, 52, 70, 71, 80, 81, 99, 10, 252, 30, 31, 11} <= classes
+    names = {"building", "fence", "other-structure", "vegetation", "trunk", "pole"}
+    names |= {"traffic-sign", "other-object", "car", "moving-car", "person", "bicyclist"}
+    assert {ID[n] for n in names | {"bicycle"}} <= classes
     things = scene.instances
     assert all(c in THINGS for c in things.values())
     # Both kerbs are lined with parked cars over the 190 m street.
-    parked = [p for p in scene.boxes if p.semantic in (10, 18) and p.instance]
+    parked = [p for p in scene.boxes if p.semantic in (ID["car"], ID["truck"]) and p.instance]
     assert 50 <= len({p.instance for p in parked}) <= 80
     assert {np.sign(p.center[1]) for p in parked} == {-1.0, 1.0}
-    assert 1 <= sum(c == 252 for c in things.values()) <= 3
-    assert 40 <= sum(c == 30 for c in things.values()) <= 70
-    assert 2 <= sum(c == 31 for c in things.values()) <= 5
+    assert 1 <= sum(c == ID["moving-car"] for c in things.values()) <= 3
+    assert 40 <= sum(c == ID["person"] for c in things.values()) <= 70
+    assert 2 <= sum(c == ID["bicyclist"] for c in things.values()) <= 5
     for p in [*scene.boxes, *scene.cylinders]:
         assert (p.instance > 0) == (p.semantic in THINGS)
 
@@ -262,3 +265,16 @@ def test_ensure_sample(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
 def test_default_sample_dir(monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.delenv("FLIC_SAMPLE_DIR", raising=False)
     assert sample.default_sample_dir() == Path.home() / ".cache" / "flic" / "sample-v2"
+
+
+def test_every_name_of_the_former_module_is_still_importable() -> None:
+    """``flic_cli.sample`` was one module; its public names stay importable from the package."""
+    former = [
+        "EGO_VEHICLE", "HDL64_PITCH_DEG", "MAX_RANGE_M", "MOOSMANN_HEIGHT", "MOOSMANN_WIDTH",
+        "SENSOR_HEIGHT_M", "Box", "Cylinder", "Ground", "SamplePaths", "Scene", "cast",
+        "default_sample_dir", "ensure_sample", "kitti_azimuths", "make_scene",
+        "moosmann_azimuths", "write_sample",
+    ]  # fmt: skip
+    assert set(former) <= set(sample.__all__)
+    for name in sample.__all__:
+        assert getattr(sample, name) is not None

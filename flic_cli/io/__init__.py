@@ -38,6 +38,7 @@ from flic_cli.io.semantickitti import (
     write_label,
     write_poses,
     write_predictions,
+    write_times,
 )
 from flic_cli.registry import FORMATS as _FORMATS
 from flic_cli.registry import load_all
@@ -78,6 +79,7 @@ __all__ = [
     "write_png_range",
     "write_poses",
     "write_predictions",
+    "write_times",
 ]
 
 

@@ -94,15 +94,34 @@ def read_img_cfg(path: str | Path) -> ImgCfg:
     return ImgCfg(width, height, values[2], values[3], pitch)
 
 
-def write_img_cfg(path: str | Path, cfg: ImgCfg) -> None:
-    """Write an ``img.cfg`` atomically (one comment line, one data line)."""
+def write_img_cfg(
+    path: str | Path,
+    cfg: ImgCfg,
+    *,
+    comment: str | None = None,
+    pitch_format: str | None = None,
+) -> None:
+    """Write an ``img.cfg`` atomically (one comment line, one data line).
+
+    Parameters
+    ----------
+    path : the file to write.
+    cfg : its content. The horizontal angles are written with ``repr``: integers (``180``) as
+        integers, floats (``180.0``) as floats.
+    comment : text of the comment line (after ``# ``); None = the names of the fields.
+    pitch_format : format spec of the vertical angles, e.g. ``".4f"`` (4 decimals, as the real
+        files have); None = ``repr`` (exact round trip).
+    """
+    if comment is None:
+        comment = (
+            "imgHSize; imgVSize; horizStartAngle; horizStopAngle; vertAngle_1; ...; vertAngle_n"
+        )
     fields = [str(cfg.width), str(cfg.height), repr(cfg.h_start_deg), repr(cfg.h_stop_deg)]
-    fields += [repr(float(a)) for a in cfg.pitch_deg]
-    text = (
-        "# imgHSize; imgVSize; horizStartAngle; horizStopAngle; vertAngle_1; ...; vertAngle_n\n"
-        + "; ".join(fields)
-        + ";\n"
-    )
+    fields += [
+        repr(float(a)) if pitch_format is None else format(float(a), pitch_format)
+        for a in cfg.pitch_deg
+    ]
+    text = f"# {comment}\n" + "; ".join(fields) + ";\n"
     atomic_write_bytes(path, text.encode())
 
 

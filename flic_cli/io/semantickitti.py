@@ -240,10 +240,16 @@ def read_calib(path: str | Path) -> dict[str, np.ndarray]:
     return calib
 
 
-def write_calib(path: str | Path, calib: dict[str, np.ndarray]) -> None:
-    """Write a KITTI ``calib.txt`` (each value a (3, 4) matrix) atomically."""
+def write_calib(
+    path: str | Path, calib: dict[str, np.ndarray], *, float_format: str = ".12e"
+) -> None:
+    """Write a KITTI ``calib.txt`` (each value a (3, 4) matrix) atomically.
+
+    ``float_format`` is the format spec of every number (KITTI's own files use ``".6e"``).
+    """
     lines = [
-        f"{key}: " + " ".join(f"{v:.12e}" for v in np.asarray(m, dtype=np.float64).reshape(12))
+        f"{key}: "
+        + " ".join(format(v, float_format) for v in np.asarray(m, dtype=np.float64).reshape(12))
         for key, m in calib.items()
     ]
     atomic_write_bytes(path, ("\n".join(lines) + "\n").encode())
@@ -266,13 +272,27 @@ def read_poses(path: str | Path) -> np.ndarray:
     return np.stack(poses)
 
 
-def write_poses(path: str | Path, poses: np.ndarray) -> None:
-    """Write (F, 3, 4) poses as a KITTI ``poses.txt`` atomically."""
+def write_poses(path: str | Path, poses: np.ndarray, *, float_format: str = ".12e") -> None:
+    """Write (F, 3, 4) poses as a KITTI ``poses.txt`` atomically.
+
+    ``float_format`` is the format spec of every number (KITTI's own files use ``".6e"``).
+    """
     poses = np.asarray(poses, dtype=np.float64)
     if poses.ndim != 3 or poses.shape[1:] != (3, 4):
         raise ValueError(f"poses must have shape (F, 3, 4), got {poses.shape}")
-    text = "".join(" ".join(f"{v:.12e}" for v in p.reshape(12)) + "\n" for p in poses)
+    text = "".join(" ".join(format(v, float_format) for v in p.reshape(12)) + "\n" for p in poses)
     atomic_write_bytes(path, text.encode())
+
+
+def write_times(path: str | Path, times_s: np.ndarray, *, float_format: str = ".6e") -> None:
+    """Write a KITTI ``times.txt`` atomically: one timestamp in seconds per line.
+
+    ``float_format`` is the format spec of every number (default ``".6e"``, as KITTI's files).
+    """
+    times_s = np.asarray(times_s, dtype=np.float64)
+    if times_s.ndim != 1:
+        raise ValueError(f"times must have shape (F,), got {times_s.shape}")
+    atomic_write_bytes(path, "".join(format(t, float_format) + "\n" for t in times_s).encode())
 
 
 # ---------------------------------------------------------------------------------------------
