@@ -88,6 +88,7 @@ def estimate_line(
 
 def _duration(seconds: float) -> str:
     """``0.8 ms``, ``1.2 s``, ``3.4 min``, ``2.1 h``."""
+
     def two(value: float) -> str:
         return np.format_float_positional(value, precision=2, fractional=False, trim="-")
 
