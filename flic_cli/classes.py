@@ -1,7 +1,9 @@
 """SemanticKITTI's class table: every module that needs a class id, a name or a class group
 reads it from here (the names and ids are those of semantic-kitti-api's ``semantic-kitti.yaml``).
 
-Raw ids are the values in the lower 16 bits of a ``.label`` file.
+Raw ids are the values in the lower 16 bits of a ``.label`` file. semantic-kitti-api's scripts
+(``evaluate_panoptic.py``, ``evaluate_semantics.py``) first map raw ids to 20 *training classes*
+(``learning_map``; 0 = unlabeled, ignored), see :data:`LEARNING_MAP` and :func:`learning_class`.
 """
 
 from __future__ import annotations
@@ -101,3 +103,62 @@ def thing_mask(labels: np.ndarray) -> np.ndarray:
     """
     labels = np.asarray(labels).astype(np.uint32, copy=False)
     return THING_LUT[labels & 0xFFFF] & (labels > 0xFFFF)
+
+
+# ---------------------------------------------------------------------------------------------
+# semantic-kitti-api's training classes (config/semantic-kitti.yaml: learning_map, labels)
+# ---------------------------------------------------------------------------------------------
+
+#: Raw id -> training class id (``learning_map`` of semantic-kitti-api's semantic-kitti.yaml):
+#: moving objects join their static class, bus and on-rails become other-vehicle, lane-marking
+#: becomes road, and outlier, other-structure and other-object become 0 (unlabeled, ignored).
+LEARNING_MAP: dict[int, int] = {
+    0: 0, 1: 0, 10: 1, 11: 2, 13: 5, 15: 3, 16: 5, 18: 4, 20: 5, 30: 6, 31: 7, 32: 8,
+    40: 9, 44: 10, 48: 11, 49: 12, 50: 13, 51: 14, 52: 0, 60: 9, 70: 15, 71: 16, 72: 17,
+    80: 18, 81: 19, 99: 0, 252: 1, 253: 7, 254: 6, 255: 8, 256: 5, 257: 5, 258: 4, 259: 5,
+}  # fmt: skip
+
+#: Name of each training class, index = training id (``labels[learning_map_inv[id]]``).
+LEARNING_NAMES: tuple[str, ...] = (
+    "unlabeled", "car", "bicycle", "motorcycle", "truck", "other-vehicle", "person",
+    "bicyclist", "motorcyclist", "road", "parking", "sidewalk", "other-ground", "building",
+    "fence", "vegetation", "trunk", "terrain", "pole", "traffic-sign",
+)  # fmt: skip
+
+#: Training classes that the evaluation ignores (``learning_ignore``): points whose ground truth
+#: is one of them are left out of every score.
+LEARNING_IGNORE: tuple[int, ...] = (0,)
+
+#: Thing training classes (``things`` of ``evaluate_panoptic.py``: car, truck, bicycle,
+#: motorcycle, other-vehicle, person, bicyclist, motorcyclist) and the stuff ones (road ...
+#: traffic-sign). Together they are the 19 classes every panoptic mean is taken over.
+LEARNING_THINGS: tuple[int, ...] = (1, 2, 3, 4, 5, 6, 7, 8)
+LEARNING_STUFF: tuple[int, ...] = (9, 10, 11, 12, 13, 14, 15, 16, 17, 18, 19)
+
+
+def _learning_lut() -> np.ndarray:
+    lut = np.zeros(1 << 16, dtype=np.int64)
+    lut[list(LEARNING_MAP)] = list(LEARNING_MAP.values())
+    lut.setflags(write=False)
+    return lut
+
+
+#: ``LEARNING_LUT[semantic]``: training class of any 16-bit raw id. Ids that SemanticKITTI does
+#: not define map to 0 (unlabeled), as semantic-kitti-api's lookup table does for ids up to 358
+#: (it fails with an IndexError from 359 on).
+LEARNING_LUT: np.ndarray = _learning_lut()
+
+
+def learning_class(labels: np.ndarray) -> np.ndarray:
+    """Training class (semantic-kitti-api's ``learning_map``) of every label.
+
+    Parameters
+    ----------
+    labels : (N,) SemanticKITTI labels (``uint32``; only the lower 16 bits are read) or raw
+        semantic ids.
+
+    Returns
+    -------
+    (N,) int64 training class ids in ``0..19`` (0 = unlabeled, ignored).
+    """
+    return LEARNING_LUT[np.asarray(labels).astype(np.uint32, copy=False) & 0xFFFF]

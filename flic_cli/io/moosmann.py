@@ -125,6 +125,36 @@ def write_img_cfg(
     atomic_write_bytes(path, text.encode())
 
 
+def _read_png16(path: str | Path, size: tuple[int, int], expected: str) -> np.ndarray:
+    """Pixels of a 16-bit greyscale PNG of ``size = (width, height)`` pixels, checked.
+
+    ``expected`` says where the size comes from, for the error message.
+    """
+    data = read_bytes(path)
+    try:
+        with Image.open(io.BytesIO(data)) as img:
+            img.load()
+            fmt, got = img.format, img.size
+            pixels = np.asarray(img)
+    except UnidentifiedImageError:
+        raise FlicInputError(path, "is not an image Pillow can decode, expected a PNG") from None
+    except (OSError, SyntaxError, ValueError) as exc:
+        raise FlicInputError(path, f"cannot be decoded ({exc})") from None
+    if fmt != "PNG":
+        raise FlicInputError(path, f"is a {fmt} image, expected a 16-bit greyscale PNG")
+    # The IHDR chunk comes first: bytes 24 and 25 are the bit depth and the colour type.
+    depth, colour = data[24], data[25]
+    if (depth, colour) != (16, 0):
+        raise FlicInputError(
+            path,
+            f"is {depth}-bit {_PNG_COLOUR_TYPES.get(colour, f'colour type {colour}')}, "
+            "expected 16-bit greyscale",
+        )
+    if got != size:
+        raise FlicInputError(path, f"is {got[0]}x{got[1]} but {expected} {size[0]}x{size[1]}")
+    return pixels
+
+
 def read_png_range(path: str | Path, cfg: ImgCfg) -> np.ndarray:
     """Read a 16-bit greyscale PNG range image.
 
@@ -143,30 +173,7 @@ def read_png_range(path: str | Path, cfg: ImgCfg) -> np.ndarray:
         When the file is missing, not a decodable PNG, not 16-bit greyscale or not of the size
         that ``img.cfg`` declares.
     """
-    data = read_bytes(path)
-    try:
-        with Image.open(io.BytesIO(data)) as img:
-            img.load()
-            fmt, size = img.format, img.size
-            pixels = np.asarray(img)
-    except UnidentifiedImageError:
-        raise FlicInputError(path, "is not an image Pillow can decode, expected a PNG") from None
-    except (OSError, SyntaxError, ValueError) as exc:
-        raise FlicInputError(path, f"cannot be decoded ({exc})") from None
-    if fmt != "PNG":
-        raise FlicInputError(path, f"is a {fmt} image, expected a 16-bit greyscale PNG")
-    # The IHDR chunk comes first: bytes 24 and 25 are the bit depth and the colour type.
-    depth, colour = data[24], data[25]
-    if (depth, colour) != (16, 0):
-        raise FlicInputError(
-            path,
-            f"is {depth}-bit {_PNG_COLOUR_TYPES.get(colour, f'colour type {colour}')}, "
-            "expected 16-bit greyscale",
-        )
-    if size != (cfg.width, cfg.height):
-        raise FlicInputError(
-            path, f"is {size[0]}x{size[1]} but img.cfg says {cfg.width}x{cfg.height}"
-        )
+    pixels = _read_png16(path, (cfg.width, cfg.height), "img.cfg says")
     return pixels.astype(np.float32) / np.float32(RANGE_SCALE)
 
 
@@ -184,6 +191,105 @@ def write_png_range(path: str | Path, ranges_m: np.ndarray) -> None:
     pixels = np.clip(np.rint(r * RANGE_SCALE), 0, 65535).astype("<u2")
     with atomic_write(path) as tmp:
         Image.fromarray(pixels).save(tmp, format="PNG")
+
+
+# ---------------------------------------------------------------------------------------------
+# Predictions as label images
+# ---------------------------------------------------------------------------------------------
+
+LABEL_IMAGE_SUFFIX = ".label.png"
+"""Suffix of a label image: ``scan00012.png`` -> ``scan00012.label.png``."""
+
+
+def label_image_path(out_root: str | Path, log: str, range_image: str | Path) -> Path:
+    """Where the predictions of a Moosmann range image go: ``<out_root>/<log>/<name>.label.png``.
+
+    The label image is named after its range image (``scan00012.png`` ->
+    ``scan00012.label.png``, the digits as in the log) in a folder named after the log. The
+    double suffix keeps it from being taken for a range image (``scanNNNNN.png``) when the output
+    folder is read as a log.
+
+    Parameters
+    ----------
+    out_root : the output root.
+    log : the log's name (its folder's name, the ``sequence`` of its frames).
+    range_image : the range image's path or file name.
+    """
+    return Path(out_root) / log / (Path(range_image).stem + LABEL_IMAGE_SUFFIX)
+
+
+def label_image(point_pixel: np.ndarray, labels: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
+    """Per-point labels as an image: every pixel holds the label of its points, 0 elsewhere.
+
+    Parameters
+    ----------
+    point_pixel : (N,) flat pixel index of every point (``RangeImage.point_pixel``; -1 = none).
+    labels : (N,) cluster ids of the points (values <= 0 = none); points that share a pixel
+        share its cluster id, and the last such point's id is kept.
+    shape : (height, width) of the range image.
+
+    Returns
+    -------
+    (height, width) int64 image, 0 = no measurement or no cluster.
+    """
+    pix = np.asarray(point_pixel, dtype=np.int64)
+    lab = np.asarray(labels, dtype=np.int64)
+    if pix.shape != lab.shape:
+        raise ValueError(f"point_pixel and labels differ in shape: {pix.shape}, {lab.shape}")
+    out = np.zeros(shape[0] * shape[1], dtype=np.int64)
+    has = pix >= 0
+    out[pix[has]] = np.maximum(lab[has], 0)
+    return out.reshape(shape)
+
+
+def write_label_image(path: str | Path, labels: np.ndarray) -> Path:
+    """Write a label image as a 16-bit greyscale PNG atomically (Pillow).
+
+    Parameters
+    ----------
+    path : the file to write (see :func:`label_image_path`).
+    labels : (H, W) integer cluster ids in ``0..65535`` (0 = none), the size of the range image.
+
+    Returns
+    -------
+    The written file.
+
+    Raises
+    ------
+    ValueError
+        When ``labels`` is not a 2-D integer array or holds an id outside ``0..65535``.
+    """
+    lab = np.asarray(labels)
+    if lab.ndim != 2 or not np.issubdtype(lab.dtype, np.integer):
+        raise ValueError(f"labels must be a 2-D integer array, got {lab.dtype} {lab.shape}")
+    if lab.size and (lab.min() < 0 or lab.max() > 0xFFFF):
+        raise ValueError(
+            f"cluster ids must lie in 0..65535 to fit a 16-bit PNG, got {lab.min()}..{lab.max()}"
+        )
+    path = Path(path)
+    with atomic_write(path) as tmp:
+        Image.fromarray(lab.astype("<u2")).save(tmp, format="PNG")
+    return path
+
+
+def read_label_image(path: str | Path, cfg: ImgCfg) -> np.ndarray:
+    """Read a label image written by :func:`write_label_image`.
+
+    Parameters
+    ----------
+    path : the ``.label.png`` file.
+    cfg : the log's ``img.cfg``; the image must have its size.
+
+    Returns
+    -------
+    (height, width) int32 cluster ids, 0 = none.
+
+    Raises
+    ------
+    FlicInputError
+        When the file is missing, not a 16-bit greyscale PNG or not of the log's image size.
+    """
+    return _read_png16(path, (cfg.width, cfg.height), "img.cfg says").astype(np.int32)
 
 
 # ---------------------------------------------------------------------------------------------

@@ -2,7 +2,8 @@
 
 Layout (SPEC §1): ``<root>/sequences/<NN>/velodyne/<XXXXXX>.bin`` and
 ``<root>/sequences/<NN>/labels/<XXXXXX>.label``; ``<root>`` may also be one sequence folder.
-Predictions use the ``.label`` encoding with the cluster id in the upper 16 bits, in
+Predictions use the ``.label`` encoding with the cluster id in the upper 16 bits and the semantic
+class (0 = unlabeled unless semantics are given) in the lower 16 bits, in
 ``<out>/sequences/<NN>/predictions/<XXXXXX>.label``.
 """
 
@@ -306,37 +307,65 @@ def predictions_path(out_root: str | Path, sequence: str, frame: int) -> Path:
 
 
 def write_predictions(
-    out_root: str | Path, sequence: str, frame: int, cluster_ids: np.ndarray
+    out_root: str | Path,
+    sequence: str,
+    frame: int,
+    cluster_ids: np.ndarray,
+    semantics: np.ndarray | None = None,
 ) -> Path:
-    """Write one frame's cluster ids as a ``.label`` file (id in the upper 16 bits, semantic 0).
+    """Write one frame's predictions as a ``.label`` file.
 
     Parameters
     ----------
     out_root : the output root.
     sequence, frame : which frame.
-    cluster_ids : (N,) integers in ``0..65535``, one per point of the scan, 0 = unclustered.
+    cluster_ids : (N,) integers in ``0..65535``, one per point of the scan, 0 = unclustered;
+        written as they are to the upper 16 bits (the instance ids).
+    semantics : (N,) raw SemanticKITTI class ids in ``0..65535``, written to the lower 16 bits;
+        None (default) writes class 0 (unlabeled) for every point. To write a panoptic
+        prediction (semantics, and instance ids that semantic-kitti-api scores as intended), use
+        :func:`flic_cli.semantics.write_semantic_predictions`.
 
     Returns
     -------
     The written file (see :func:`predictions_path`).
     """
     ids = np.asarray(cluster_ids)
+    sem = np.zeros_like(ids) if semantics is None else np.asarray(semantics)
+    if sem.shape != ids.shape:
+        raise ValueError(f"semantics has shape {sem.shape} but cluster_ids has shape {ids.shape}")
     path = predictions_path(out_root, sequence, frame)
-    write_label(path, encode_labels(np.zeros_like(ids), ids))
+    write_label(path, encode_labels(sem, ids))
     return path
 
 
 def read_predictions(
-    out_root: str | Path, sequence: str, frame: int, n_points: int | None = None
-) -> np.ndarray:
-    """Read one frame's cluster ids written by :func:`write_predictions`.
+    out_root: str | Path,
+    sequence: str,
+    frame: int,
+    n_points: int | None = None,
+    semantics: bool = False,
+) -> np.ndarray | tuple[np.ndarray, np.ndarray]:
+    """Read one frame's predictions written by :func:`write_predictions`.
+
+    Parameters
+    ----------
+    out_root : the output root.
+    sequence, frame : which frame.
+    n_points : the number of points of the scan; checked when given.
+    semantics : also return the semantic classes.
 
     Returns
     -------
-    (N,) int32 cluster ids, 0 = unclustered.
+    (N,) int32 cluster ids (upper 16 bits), 0 = unclustered; with ``semantics=True`` the tuple
+    ``(cluster ids, (N,) int32 raw semantic class ids)``.
     """
     path = predictions_path(out_root, sequence, frame)
-    return instance(read_label(path, n_points)).astype(np.int32)
+    labels = read_label(path, n_points)
+    ids = instance(labels).astype(np.int32)
+    if semantics:
+        return ids, semantic(labels).astype(np.int32)
+    return ids
 
 
 # ---------------------------------------------------------------------------------------------

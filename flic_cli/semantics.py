@@ -1,0 +1,217 @@
+"""Semantics in the predictions: ``flic segment --semantics none | oracle | DIR``.
+
+A panoptic prediction holds, per point, a semantic class (lower 16 bits of the ``.label`` value)
+and an instance id (upper 16 bits). flic clusters; the semantics come from elsewhere:
+
+- ``none`` -- semantic class 0 everywhere (flic's historical output, class-agnostic clusters);
+- ``oracle`` -- each point's ground-truth raw class (:func:`oracle_semantics`), the upper bound of
+  "semantic network + clustering" used in the literature;
+- ``DIR`` -- a semantic network's predictions (:func:`read_semantics`), the standard "semantic
+  network + clustering" panoptic baseline.
+
+With semantics, only the points of thing classes are clustered (:func:`cluster_mask`), and
+:func:`combine` turns semantics and cluster ids into the labels to write.
+
+Layout of ``DIR`` (decided here)
+--------------------------------
+``DIR/sequences/<NN>/predictions/<XXXXXX>.label``: the layout that semantic-kitti-api's
+``evaluate_semantics.py`` reads, that SemanticKITTI's benchmark asks for, and that ``flic segment``
+writes. One ``uint32`` per point of the scan as stored in its ``.bin``; only the lower 16 bits
+(the raw SemanticKITTI class, e.g. 10 = car, 40 = road, as written after the inverse
+``learning_map``) are read; the upper 16 bits are ignored. Every class must be one that
+SemanticKITTI defines (:data:`flic_cli.classes.CLASS_NAMES`).
+
+Unclustered points of thing classes (decided here, from semantic-kitti-api's code)
+-----------------------------------------------------------------------------------
+semantic-kitti-api's ``PanopticEval`` adds 1 to every label, so instance 0 is *not* "no instance":
+all car points with instance 0 would form one car segment, an FP once it reaches 50 points (or
+even a TP). It only drops points whose *ground truth* is unlabeled, and it never counts an
+unmatched segment under ``min_points`` (50) as FP. Changing the predicted class of the
+unclustered points (e.g. to 0, unlabeled) would hide them too, but it changes the semantic mIoU
+(every such point becomes a false negative of its class). So :func:`combine` keeps every point's
+semantic class (the mIoU is untouched) and gives each unclustered thing point an instance id of
+its own: a one-point segment, below any ``min_points >= 2``, never an FP. The ids follow the
+largest cluster id (numbered per raw class, in scan order); should a frame have more such points
+than free ids, the ids repeat cyclically, so a segment holds at most
+``ceil(points / free ids)`` far-apart points (an error if that would reach 50).
+
+What this still counts (and what an "unclustered" point cannot avoid, since every predicted
+point of an evaluated class is in some segment): a one-point segment is a TP exactly when a
+ground-truth object has this single point (IoU 1); it never matches a larger object (IoU <= 1/2).
+Instance ids of stuff points, and of points whose class maps to unlabeled, are 0 (stuff segments
+are then one per raw class, as in the ground truth).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from flic_cli.classes import CLASS_NAMES, THING_LUT
+from flic_cli.errors import FlicInputError
+from flic_cli.io.semantickitti import (
+    encode_labels,
+    predictions_path,
+    read_label,
+    write_predictions,
+)
+
+__all__ = [
+    "MODES",
+    "cluster_mask",
+    "combine",
+    "oracle_semantics",
+    "read_semantics",
+    "semantics_path",
+    "write_semantic_predictions",
+]
+
+#: The named modes of ``--semantics`` (anything else is a folder).
+MODES: tuple[str, ...] = ("none", "oracle")
+
+#: Largest id a segment made of unclustered points may reach without ever counting as FP.
+_MAX_SINGLETON_SEGMENT = 49
+
+_KNOWN = np.zeros(1 << 16, dtype=bool)
+_KNOWN[list(CLASS_NAMES)] = True
+
+
+def semantics_path(root: str | Path, sequence: str, frame: int) -> Path:
+    """``<root>/sequences/<sequence>/predictions/<frame:06d>.label`` (see the module docstring)."""
+    return predictions_path(root, sequence, frame)
+
+
+def read_semantics(root: str | Path, sequence: str, frame: int, n_points: int) -> np.ndarray:
+    """Read a semantic network's classes for one frame.
+
+    Parameters
+    ----------
+    root : the ``--semantics`` folder (``<root>/sequences/<NN>/predictions/<XXXXXX>.label``).
+    sequence, frame : which frame.
+    n_points : number of points of the scan as stored in its ``.bin`` (one label each).
+
+    Returns
+    -------
+    (N,) uint16 raw SemanticKITTI class ids (the lower 16 bits of each label).
+
+    Raises
+    ------
+    FlicInputError
+        Naming the file when it is missing, holds another number of labels than the scan has
+        points, or holds a class that SemanticKITTI does not define.
+    """
+    path = semantics_path(root, sequence, frame)
+    sem = (read_label(path, n_points) & 0xFFFF).astype(np.uint16)
+    unknown = np.unique(sem[~_KNOWN[sem]])
+    if unknown.size:
+        listed = ", ".join(str(int(u)) for u in unknown[:5])
+        more = f" and {unknown.size - 5} more" if unknown.size > 5 else ""
+        raise FlicInputError(
+            path, f"holds semantic classes that SemanticKITTI does not define: {listed}{more}"
+        )
+    return sem
+
+
+def oracle_semantics(gt_labels: np.ndarray) -> np.ndarray:
+    """Each point's ground-truth raw class (``--semantics oracle``).
+
+    Parameters
+    ----------
+    gt_labels : (N,) SemanticKITTI labels (``uint32``) of every point of the scan.
+
+    Returns
+    -------
+    (N,) uint16 raw class ids (moving classes stay moving, lane-marking stays lane-marking).
+    """
+    return (np.asarray(gt_labels).astype(np.uint32, copy=False) & 0xFFFF).astype(np.uint16)
+
+
+def cluster_mask(semantics: np.ndarray) -> np.ndarray:
+    """The points to cluster: those of a thing class (:data:`flic_cli.classes.THING_CLASSES`).
+
+    Parameters
+    ----------
+    semantics : (N,) raw class ids (or full labels; only the lower 16 bits are read).
+
+    Returns
+    -------
+    (N,) bool.
+    """
+    return THING_LUT[np.asarray(semantics).astype(np.uint32, copy=False) & 0xFFFF]
+
+
+def combine(semantics: np.ndarray, cluster_ids: np.ndarray) -> np.ndarray:
+    """Panoptic labels from semantics and cluster ids (the unclustered-point rule above).
+
+    Parameters
+    ----------
+    semantics : (N,) raw SemanticKITTI class ids, one per point of the scan.
+    cluster_ids : (N,) cluster ids in ``0..65535`` (values <= 0 = unclustered), e.g. from
+        clustering the :func:`cluster_mask` points, 0 elsewhere. Ids of points of stuff classes
+        are ignored.
+
+    Returns
+    -------
+    (N,) uint32 labels ``instance << 16 | semantic``: thing points in a cluster carry its id,
+    unclustered thing points one-point segments (ids above the largest cluster id, counted per
+    raw class), every other point instance 0.
+
+    Raises
+    ------
+    ValueError
+        When the arrays differ in length, an id does not fit 16 bits, or a frame has so many
+        unclustered thing points that a segment of them would reach 50 points.
+    """
+    sem = np.asarray(semantics).astype(np.int64)
+    ids = np.asarray(cluster_ids).astype(np.int64)
+    if sem.ndim != 1 or ids.shape != sem.shape:
+        raise ValueError(
+            f"semantics and cluster_ids must be 1-D of one length, got {sem.shape}, {ids.shape}"
+        )
+    if sem.size and (sem.min() < 0 or sem.max() > 0xFFFF):
+        raise ValueError("semantic ids must lie in 0..65535")
+    thing = cluster_mask(sem)
+    clustered = thing & (ids > 0)
+    instance = np.where(clustered, ids, 0)
+    loose = np.flatnonzero(thing & ~clustered)
+    if loose.size:
+        top = int(instance.max(initial=0))
+        free = 0xFFFF - top
+        order = loose[np.argsort(sem[loose], kind="stable")]  # by class, then scan order
+        groups = sem[order]
+        starts = np.flatnonzero(np.r_[True, groups[1:] != groups[:-1]])
+        rank = np.arange(order.size) - np.repeat(starts, np.diff(np.r_[starts, order.size]))
+        largest = int(np.diff(np.r_[starts, order.size]).max())
+        if free < 1 or -(-largest // free) > _MAX_SINGLETON_SEGMENT:
+            raise ValueError(
+                f"{largest} unclustered points of one thing class and {top} clusters do not fit "
+                "16-bit instance ids as segments of under 50 points"
+            )
+        instance[order] = top + 1 + rank % free
+    return encode_labels(sem, instance)
+
+
+def write_semantic_predictions(
+    out_root: str | Path,
+    sequence: str,
+    frame: int,
+    semantics: np.ndarray,
+    cluster_ids: np.ndarray,
+) -> Path:
+    """Write one frame's panoptic prediction: :func:`combine`, then
+    :func:`flic_cli.io.semantickitti.write_predictions`.
+
+    Parameters
+    ----------
+    out_root : the output root (``<out_root>/sequences/<NN>/predictions/<XXXXXX>.label``).
+    sequence, frame : which frame.
+    semantics : (N,) raw class ids, one per point of the scan as stored.
+    cluster_ids : (N,) cluster ids (0 = unclustered), one per point of the scan as stored.
+
+    Returns
+    -------
+    The written file.
+    """
+    labels = combine(semantics, cluster_ids)
+    return write_predictions(out_root, sequence, frame, labels >> 16, labels & 0xFFFF)
