@@ -44,13 +44,29 @@ def test_mc_option_selects_the_preset(small_sample, tmp_path):
 
 @pytest.mark.parametrize("method", METHODS)
 def test_segment_moosmann_log(small_sample, tmp_path, method):
+    """Moosmann predictions are 16-bit label images named after their range images, holding
+    exactly the labels of the method on that image."""
+    from flic_cli.config import load_config
+    from flic_cli.io.moosmann import label_image_path, read_label_image
+    from flic_cli.runs.pipeline import build_segmenter
+
     result = _segment(
         small_sample.moosmann_log, "--method", method, "--out", tmp_path, "--render", 1
     )
     assert result.exit_code == 0, result.output
-    files = sorted((tmp_path / "sequences").glob("*/predictions/*.label"))
-    assert len(files) == 3
-    assert list(tmp_path.glob("render_*_000001.png"))
+    ds = open_dataset(small_sample.moosmann_log)
+    seg = build_segmenter(load_config(), method, "ground", "own")
+    for ref in ds.refs():
+        path = label_image_path(tmp_path, ref.sequence, ref.path)
+        assert path.name == ref.path.stem + ".label.png"
+        got = read_label_image(path, ds._cfg[ref.sequence])
+        frame = ds.load(ref)
+        labels, _ = seg(frame.image, frame.points)
+        expected = np.zeros(frame.image.ranges.size, dtype=np.int64)
+        expected[frame.image.point_pixel] = labels
+        np.testing.assert_array_equal(got.reshape(-1), expected)
+    assert list(tmp_path.glob("render_*_000001.png")) and list(tmp_path.glob("views_*_000001.png"))
+    assert not list(tmp_path.rglob("*.label"))
 
 
 def test_no_ground_setting_drops_ground_classes(small_sample, tmp_path):
@@ -149,7 +165,12 @@ def test_empty_moosmann_frame_is_segmented_to_nothing(small_sample, tmp_path):
     write_png_range(log / "scan00001.png", np.zeros((64, 870), np.float32))
     result = _segment(log, "--out", tmp_path / "out")
     assert result.exit_code == 0, result.output
-    assert read_predictions(tmp_path / "out", "log", 1).size == 0
+    from flic_cli.io.moosmann import label_image_path, read_img_cfg, read_label_image
+
+    image = read_label_image(
+        label_image_path(tmp_path / "out", "log", "scan00001.png"), read_img_cfg(log / "img.cfg")
+    )
+    assert image.shape == (64, 870) and not image.any()
 
 
 @pytest.mark.parametrize("setting", ["ground", "no-ground"])
@@ -202,3 +223,44 @@ def test_spherical_fallback_is_named_for_every_frame_and_counted(small_sample, t
         str(root / "sequences" / "00" / "velodyne" / f"{f:06d}.bin") for f in (0, 2)
     ]
     assert "2 frame(s) projected spherically" in captured.out
+
+
+def test_semantics_oracle_and_a_network_folder(small_sample, tmp_path):
+    """--semantics writes the classes in the lower 16 bits; only thing points are clustered
+    (ids in the upper bits); stuff points carry instance 0; a network's folder is read."""
+    from flic_cli.classes import THING_LUT
+    from flic_cli.io import read_label, write_label
+
+    root = small_sample.kitti_root
+    result = _segment(root, "--semantics", "oracle", "--method", "flic14", "--out", tmp_path / "o")
+    assert result.exit_code == 0, result.output
+    gt = read_label(root / "sequences" / "00" / "labels" / "000000.label")
+    pred = np.fromfile(tmp_path / "o" / "sequences" / "00" / "predictions" / "000000.label", "<u4")
+    np.testing.assert_array_equal(pred & 0xFFFF, gt & 0xFFFF)
+    thing = THING_LUT[gt & 0xFFFF]
+    assert np.all(pred[~thing] >> 16 == 0) and (pred[thing] >> 16 > 0).all()
+
+    # a "network" that calls every car a building: cars are no longer clustered
+    net = tmp_path / "net"
+    for ref in open_dataset(root).refs():
+        labels = read_label(ref.label_path) & 0xFFFF
+        labels[labels == 10] = 50
+        write_label(net / "sequences" / "00" / "predictions" / f"{ref.frame:06d}.label", labels)
+    result = _segment(root, "--semantics", net, "--out", tmp_path / "n")
+    assert result.exit_code == 0, result.output
+    pred = np.fromfile(tmp_path / "n" / "sequences" / "00" / "predictions" / "000000.label", "<u4")
+    cars = (gt & 0xFFFF) == 10
+    assert cars.any() and np.all(pred[cars] == 50)
+
+
+def test_export_ply(small_sample, tmp_path):
+    from plyfile import PlyData
+
+    result = _segment(
+        small_sample.kitti_root, "--frames", "0:2", "--export", "ply", "--out", tmp_path
+    )
+    assert result.exit_code == 0, result.output
+    pred = read_predictions(tmp_path, "00", 1)
+    ply = PlyData.read(tmp_path / "sequences" / "00" / "ply" / "000001.ply")["vertex"]
+    np.testing.assert_array_equal(ply["cluster"], pred)  # ground setting: every point kept
+    assert {"x", "y", "z", "red", "green", "blue"} <= set(ply.data.dtype.names)

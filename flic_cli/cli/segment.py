@@ -32,6 +32,9 @@ from flic_cli.cli.app import (
         "- `flic segment ~/kitti --sequences 08 --frames 0:500 --method flic --mc 14 "
         "--out pred/`\n\n"
         "- `flic segment ~/moosmann/log1 --method bogoslavskyi --render 10 --out pred/`\n\n"
+        "- `flic segment ~/kitti --sequences 08 --method flic14 --semantics oracle --out pan/` "
+        "(panoptic predictions for semantic-kitti-api)\n\n"
+        "- `flic segment ~/kitti --frames 0:10 --export ply --out ply/`\n\n"
         "A run that stops at a bad frame writes nothing (use --skip-bad to go on past it)."
     )
 )
@@ -53,16 +56,34 @@ def segment(
     render: Annotated[
         int | None,
         typer.Option(
-            help="Also write a PNG of this frame number (one of the selected frames), coloured "
-            "by cluster."
+            help="Also draw this frame number (one of the selected frames): its range image "
+            "(render_*.png) and bird's-eye and 3D views (views_*.png), with labels ground truth "
+            "beside the prediction and missed, split and merged objects marked."
+        ),
+    ] = None,
+    semantics: Annotated[
+        str,
+        typer.Option(
+            help="Semantic classes written with the clusters (SemanticKITTI): `none` (class 0); "
+            "`oracle` (each point's ground-truth class, an upper bound); or DIR, a semantic "
+            "network's predictions (DIR/sequences/NN/predictions/NNNNNN.label). With semantics "
+            "only the points of thing classes are clustered, without ground extraction."
+        ),
+    ] = "none",
+    export: Annotated[
+        list[str] | None,
+        typer.Option(
+            help="Also write each frame as: `ply` (a PLY point cloud with cluster ids and colours, "
+            "for CloudCompare, MeshLab, Open3D). Repeatable."
         ),
     ] = None,
     jobs: JobsOpt = 1,
     skip_bad: SkipBadOpt = False,
 ) -> None:
-    """Segment scans and write predictions in SemanticKITTI `.label` encoding
-    (cluster id in the upper 16 bits, 0 = unclustered; one label per point of the `.bin`)
-    under `OUT/sequences/NN/predictions/`."""
+    """Segment scans and write predictions: for SemanticKITTI `.label` files (cluster id in the
+    upper 16 bits, 0 = unclustered, the semantic class in the lower 16; one label per point of
+    the `.bin`) under `OUT/sequences/NN/predictions/`, for Moosmann logs 16-bit label images
+    `OUT/<log>/scanNNNNN.label.png` (the cluster id of each pixel, 0 = none)."""
     from flic_cli.config import load_config
     from flic_cli.runs.pipeline import resolve_method
     from flic_cli.runs.segment import run_segment
@@ -81,6 +102,8 @@ def segment(
         render,
         jobs=jobs,
         skip_bad=skip_bad,
+        semantics=semantics,
+        export=tuple(export or ()),
     )
     typer.echo(summary.line())
 

@@ -82,6 +82,21 @@ class Dataset(Protocol):
         """The folders the selected frames live in (outputs must not go inside them)."""
         ...
 
+    def write_prediction(
+        self,
+        out: Path,
+        ref: FrameRef,
+        labels: np.ndarray,
+        image: RangeImage | None = None,
+        semantics: np.ndarray | None = None,
+    ) -> Path:
+        """Write one frame's cluster ids (one per point as stored) in the format's own way."""
+        ...
+
+    def export_path(self, out: Path, ref: FrameRef, suffix: str) -> Path:
+        """Where a per-frame export (e.g. ``.ply``) of frame ``ref`` goes under ``out``."""
+        ...
+
     def load(self, ref: FrameRef) -> Frame:
         """Read one frame; raises :class:`flic_cli.errors.FlicInputError` on bad input."""
         ...

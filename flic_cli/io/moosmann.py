@@ -19,7 +19,7 @@ from flic_cli.errors import FlicInputError
 from flic_cli.io.atomic import atomic_write, atomic_write_bytes, read_bytes, read_text
 from flic_cli.io.base import Frame, FrameRef, select_sequences
 from flic_cli.io.semantickitti import frames_text, in_frames
-from flic_cli.range_image import from_sensor_image
+from flic_cli.range_image import RangeImage, from_sensor_image
 
 FORMAT = "moosmann"
 RANGE_SCALE = 500.0
@@ -415,6 +415,33 @@ class MoosmannDataset:
     def folders(self) -> list[Path]:
         """The folders of the selected logs (outputs must not go inside them)."""
         return sorted({_log_dir(r.path.parent) for r in self._refs})
+
+    @staticmethod
+    def write_prediction(
+        out: Path,
+        ref: FrameRef,
+        labels: np.ndarray,
+        image: RangeImage | None = None,
+        semantics: np.ndarray | None = None,
+    ) -> Path:
+        """Write one frame's prediction as a label image (:func:`label_image_path`).
+
+        Parameters
+        ----------
+        labels : (N,) cluster ids of the frame's points, i.e. of its valid pixels in row-major
+            order (0 = unclustered).
+        image : the frame's range image (its ``point_pixel`` and shape place the labels).
+        semantics : must be None (a Moosmann log has no semantic classes).
+        """
+        if image is None or semantics is not None:
+            raise ValueError("a Moosmann prediction needs the range image and takes no semantics")
+        path = label_image_path(out, ref.sequence, ref.path)
+        return write_label_image(path, label_image(image.point_pixel, labels, image.shape))
+
+    @staticmethod
+    def export_path(out: Path, ref: FrameRef, suffix: str) -> Path:
+        """Where a per-frame export goes: ``<out>/<log>/scanNNNNN<suffix>``."""
+        return Path(out) / ref.sequence / (Path(ref.path).stem + suffix)
 
     def load(self, ref: FrameRef) -> Frame:
         """Read one frame; an all-zero image gives a frame with 0 points.

@@ -18,6 +18,7 @@ import numpy as np
 from flic_cli.errors import FlicInputError
 from flic_cli.io.atomic import atomic_write_bytes, read_bytes, read_text
 from flic_cli.io.base import Frame, FrameRef, select_sequences
+from flic_cli.range_image import RangeImage
 
 FORMAT = "semantickitti"
 
@@ -485,6 +486,35 @@ class SemanticKittiDataset:
     def folders(self) -> list[Path]:
         """The folders of the selected sequences (outputs must not go inside them)."""
         return sorted({r.path.parents[1] for r in self._refs})
+
+    @staticmethod
+    def write_prediction(
+        out: Path,
+        ref: FrameRef,
+        labels: np.ndarray,
+        image: RangeImage | None = None,
+        semantics: np.ndarray | None = None,
+    ) -> Path:
+        """Write one frame's prediction: ``<out>/sequences/NN/predictions/XXXXXX.label``.
+
+        Parameters
+        ----------
+        labels : (N,) cluster ids, one per point of the ``.bin`` (0 = unclustered).
+        image : unused (the points carry their labels).
+        semantics : (N,) raw classes to write with them (see :mod:`flic_cli.semantics`), or
+            None: semantic class 0.
+        """
+        if semantics is None:
+            return write_predictions(out, ref.sequence, ref.frame, labels)
+        from flic_cli.semantics import write_semantic_predictions
+
+        return write_semantic_predictions(out, ref.sequence, ref.frame, semantics, labels)
+
+    @staticmethod
+    def export_path(out: Path, ref: FrameRef, suffix: str) -> Path:
+        """Where a per-frame export goes: ``<out>/sequences/NN/<kind>/XXXXXX.<kind>``."""
+        kind = suffix.lstrip(".")
+        return Path(out) / "sequences" / ref.sequence / kind / f"{ref.frame:06d}{suffix}"
 
     def load(self, ref: FrameRef) -> Frame:
         """Read one frame (points with non-finite coordinates dropped, with a warning)."""

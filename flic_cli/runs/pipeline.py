@@ -65,7 +65,9 @@ def check_setting(setting: str) -> str:
     return setting
 
 
-def prepare(frame: Frame, setting: str, projection: Projection) -> Prepared:
+def prepare(
+    frame: Frame, setting: str, projection: Projection, only: np.ndarray | None = None
+) -> Prepared:
     """Project a frame for the given setting.
 
     Parameters
@@ -74,6 +76,8 @@ def prepare(frame: Frame, setting: str, projection: Projection) -> Prepared:
     setting : ``"ground"`` (all points; methods extract the ground themselves) or ``"no-ground"``
         (the ground classes' points are removed by label, the paper's "No Ground" column).
     projection : how a SemanticKITTI scan becomes a range image (Moosmann frames are images).
+    only : (N,) bool over ``frame.points``: evaluate these points only (e.g. the thing classes of
+        a semantic segmentation); rows are still recovered from the whole scan.
 
     Warns
     -----
@@ -90,6 +94,8 @@ def prepare(frame: Frame, setting: str, projection: Projection) -> Prepared:
                 "no labels (use --setting ground)",
             )
         keep = ~ground_mask(labels)
+    if only is not None:
+        keep = only if keep is None else keep & only
     if frame.image is not None and keep is None:
         image = frame.image
     elif frame.image is not None:  # a sensor image with some points removed

@@ -1,9 +1,16 @@
-"""``flic segment``: predictions for every selected frame, in SemanticKITTI ``.label`` encoding.
+"""``flic segment``: predictions for every selected frame, in the data format's own encoding.
 
-The run: open the data, check ``--out`` and ``--render`` before any work, build the segmenter
-once, segment every frame (:class:`SegmentJob` through :class:`flic_cli.runs.frames.FrameLoop`,
-in parallel with ``--jobs``), and write the predictions into a staging folder that replaces the
-outputs only when the run succeeds (a run stopped by a bad frame writes nothing).
+The run: open the data, check ``--out``, ``--render`` and ``--semantics`` before any work, build the
+segmenter once, segment every frame (:class:`SegmentJob` through
+:class:`flic_cli.runs.frames.FrameLoop`, in parallel with ``--jobs``), and write the predictions
+into a staging folder that replaces the outputs only when the run succeeds (a run stopped by a bad
+frame writes nothing).
+
+Predictions: SemanticKITTI ``<out>/sequences/NN/predictions/XXXXXX.label`` (cluster id in the upper
+16 bits, the semantic class in the lower: 0, or with ``--semantics`` the given classes, see
+:mod:`flic_cli.semantics`); Moosmann logs ``<out>/<log>/scanNNNNN.label.png`` (16-bit label image).
+With ``--semantics`` only the points of thing classes are clustered (semantic network +
+clustering), without a ground remover.
 """
 
 from __future__ import annotations
@@ -16,14 +23,20 @@ import numpy as np
 
 from flic_cli.config import Config
 from flic_cli.errors import FlicInputError
-from flic_cli.io import open_dataset, write_predictions
+from flic_cli.io import open_dataset, read_label
 from flic_cli.io.atomic import staged_folder
-from flic_cli.io.base import FrameRef
+from flic_cli.io.base import Frame, FrameRef
+from flic_cli.io.ply import write_ply
 from flic_cli.projection import Projection
-from flic_cli.range_image import RangeImage
 from flic_cli.runs.frames import FrameLoop, Skipped, sort_skipped, write_skipped
 from flic_cli.runs.output import check_output_dir
-from flic_cli.runs.pipeline import Segmenter, build_segmenter, prepare
+from flic_cli.runs.pipeline import Prepared, Segmenter, build_segmenter, prepare
+
+#: ``--semantics`` values besides a folder of a semantic network's predictions.
+SEMANTICS = ("none", "oracle")
+
+#: ``--export`` formats.
+EXPORTS = ("ply",)
 
 
 @dataclass
@@ -32,42 +45,72 @@ class Segmented:
 
     Attributes
     ----------
-    labels : (N_scan,) cluster id of every point of the scan as stored (0 = none).
-    clusters : number of clusters.
-    owned, points : pixels holding a measurement and points of the evaluated set (coverage).
-    fallback : the scan's ring recovery failed and a spherical projection was used.
-    picture : ``(image, pixel labels per point, ground mask)`` of the frame to render, else None.
+    prep : the prepared frame (range image, evaluated points and their labels).
+    labels : (N,) cluster id of every evaluated point (0 = none).
+    ground : (H, W) ground mask used, or None.
+    semantics : (N_scan,) classes written with the prediction (``--semantics``), or None.
     """
 
+    prep: Prepared
     labels: np.ndarray
-    clusters: int
-    owned: int
-    points: int
-    fallback: bool
-    picture: tuple[RangeImage, np.ndarray, Any] | None = None
+    ground: np.ndarray | None
+    semantics: np.ndarray | None = None
+
+    @property
+    def clusters(self) -> int:
+        return int(self.labels.max(initial=0))
+
+    def ground_points(self) -> np.ndarray:
+        """(N,) bool, the evaluated points in a ground pixel."""
+        out = np.zeros(self.labels.shape[0], dtype=bool)
+        if self.ground is not None:
+            pix = self.prep.image.point_pixel
+            has = pix >= 0
+            out[has] = self.ground.reshape(-1)[pix[has]]
+        return out
 
 
 @dataclass(frozen=True)
 class SegmentJob:
-    """Segment one frame (picklable: the dataset and the built segmenter are sent once)."""
+    """Segment one frame (picklable: the dataset and the built segmenter are sent once).
+
+    Attributes
+    ----------
+    semantics : None (no semantics), ``"oracle"`` or a folder of a network's predictions.
+    """
 
     dataset: Any
     segmenter: Segmenter
     setting: str
     projection: Projection
-    render: int | None = None
+    semantics: str | None = None
 
     def __call__(self, ref: FrameRef) -> Segmented:
-        prep = prepare(self.dataset.load(ref), self.setting, self.projection)
-        labels, ground = self.segmenter(prep.image, prep.points)
-        return Segmented(
-            prep.scan_labels(labels),
-            int(labels.max(initial=0)),
-            int(np.count_nonzero(prep.image.ranges)),
-            int(prep.image.point_pixel.size),
-            self.projection.mode == "rings" and prep.image.projection == "spherical",
-            (prep.image, labels, ground) if ref.frame == self.render else None,
-        )
+        frame = self.dataset.load(ref)
+        if self.semantics is None:
+            prep = prepare(frame, self.setting, self.projection)
+            labels, ground = self.segmenter(prep.image, prep.points)
+            return Segmented(prep, labels, ground)
+        from flic_cli.semantics import cluster_mask
+
+        semantics = scan_semantics(ref, frame, self.semantics)
+        finite = semantics if frame.finite is None else semantics[frame.finite]
+        prep = prepare(frame, "ground", self.projection, only=cluster_mask(finite))
+        labels = self.segmenter.method.segment(prep.image, prep.points, None)
+        return Segmented(prep, labels, None, semantics)
+
+
+def scan_semantics(ref: FrameRef, frame: Frame, semantics: str) -> np.ndarray:
+    """(N_scan,) raw semantic class of every point of the scan as stored (``--semantics``)."""
+    from flic_cli.semantics import oracle_semantics, read_semantics
+
+    if semantics != "oracle":
+        return read_semantics(semantics, ref.sequence, ref.frame, frame.n_read)
+    if frame.finite is None:
+        assert frame.labels is not None  # the dataset was opened with require_labels
+        return oracle_semantics(frame.labels)
+    assert ref.label_path is not None
+    return oracle_semantics(read_label(ref.label_path, frame.n_read))  # dropped points too
 
 
 @dataclass
@@ -109,6 +152,8 @@ def run_segment(
     jobs: int = 1,
     skip_bad: bool = False,
     progress: bool = True,
+    semantics: str = "none",
+    export: tuple[str, ...] = (),
 ) -> SegmentSummary:
     """Segment every selected frame and write ``<out>/sequences/NN/predictions/XXXXXX.label``.
 
@@ -121,18 +166,32 @@ def run_segment(
     setting : ``"ground"`` or ``"no-ground"``.
     ground_remover : ``"own"`` or a remover's name (see
         :func:`flic_cli.runs.pipeline.build_segmenter`).
-    render : if set, also write ``<out>/render_<seq>_<frame>.png`` for this frame number, which
-        must be among the selected frames.
+    render : if set, also draw this frame number (which must be among the selected frames):
+        ``<out>/render_<seq>_<frame>.png`` (the range image) and ``<out>/views_<seq>_<frame>.png``
+        (bird's-eye and oblique 3D views; with labels, ground truth beside the prediction with
+        missed, split and merged objects marked).
     jobs : processes (see :func:`flic_cli.runs.parallel.imap_frames`).
     skip_bad : go on past frames whose input is bad (listed in ``skipped.csv``).
     progress : show a progress bar.
+    semantics : ``"none"``, ``"oracle"`` (ground-truth classes) or a folder of a semantic
+        network's predictions (``DIR/sequences/NN/predictions/XXXXXX.label``).
+    export : per-frame exports besides the predictions: ``"ply"`` (a PLY point cloud with
+        cluster ids and colours, :func:`flic_cli.io.ply.write_ply`).
 
     Raises
     ------
     FlicInputError
         On bad input, before any work where it can be known (data, options, ``out``).
     """
-    ds = open_dataset(data, sequences, frames, require_labels=setting == "no-ground")
+    wanted = _semantics_mode(semantics)
+    bad_export = [e for e in export if e not in EXPORTS]
+    if bad_export:
+        raise FlicInputError(None, f"--export {bad_export[0]}: one of {', '.join(EXPORTS)}")
+    ds = open_dataset(
+        data, sequences, frames, require_labels=setting == "no-ground" or wanted == "oracle"
+    )
+    if wanted is not None and ds.format != "semantickitti":
+        raise FlicInputError(data, "--semantics needs SemanticKITTI data (a scan's points)")
     refs = ds.refs()
     out = check_output_dir(Path(out), ds.folders())
     if render is not None and render not in {r.frame for r in refs}:
@@ -140,32 +199,36 @@ def run_segment(
         span = f"{shown[0]}..{shown[-1]}" if len(shown) > 1 else str(shown[0])
         raise FlicInputError(None, f"--render {render}: no such frame among the selected ({span})")
     seg = build_segmenter(config, method, setting, ground_remover)
-    job = SegmentJob(ds, seg, setting, config.projection, render)
+    job = SegmentJob(ds, seg, setting, config.projection, wanted)
     loop = FrameLoop(job, refs, jobs, None, skip_bad, f"segment {method}", progress)
     n_points = n_clusters = owned = pixels = fallbacks = 0
     renders = []
     with staged_folder(out) as stage:
         for ref, result in loop:
-            write_predictions(stage, ref.sequence, ref.frame, result.labels)
-            n_points += result.labels.size
-            n_clusters += result.clusters
-            owned += result.owned
-            pixels += result.points
-            fallbacks += result.fallback
-            if result.picture is not None:
-                from flic_cli.plots import render_segmentation
-
-                image, labels, ground = result.picture
-                name = f"render_{ref.sequence}_{ref.frame:06d}.png"
-                render_segmentation(
-                    image,
-                    labels,
-                    ground,
-                    stage / name,
-                    title=f"{method}, sequence {ref.sequence} frame {ref.frame}: "
-                    f"{result.clusters} clusters",
+            prep = result.prep
+            ds.write_prediction(
+                stage, ref, prep.scan_labels(result.labels), prep.image, result.semantics
+            )
+            if "ply" in export:
+                write_ply(
+                    ds.export_path(stage, ref, ".ply"),
+                    prep.points,
+                    result.labels,
+                    result.ground_points(),
                 )
-                renders.append(out / name)
+            n_points += prep.n_scan
+            n_clusters += result.clusters
+            owned += int(np.count_nonzero(prep.image.ranges))
+            pixels += int(prep.image.point_pixel.size)
+            fallbacks += config.projection.mode == "rings" and prep.image.projection == "spherical"
+            if ref.frame == render:
+                renders += _render(
+                    stage,
+                    ref,
+                    result,
+                    f"{method}, sequence {ref.sequence} "
+                    f"frame {ref.frame}: {result.clusters} clusters",
+                )
         if loop.skipped:
             write_skipped(stage / "skipped.csv", sort_skipped(loop.skipped))
     done = len(refs) - len(loop.skipped)
@@ -177,5 +240,39 @@ def run_segment(
         out,
         fallbacks,
         sort_skipped(loop.skipped),
-        renders,
+        [out / name for name in renders],
     )
+
+
+def _semantics_mode(semantics: str) -> str | None:
+    """``--semantics``: None for ``none``, ``"oracle"``, or the folder (which must exist)."""
+    if semantics == "none":
+        return None
+    if semantics == "oracle":
+        return semantics
+    if not Path(semantics).is_dir():
+        raise FlicInputError(
+            semantics, "--semantics: neither none, oracle nor a folder of semantic predictions"
+        )
+    return str(semantics)
+
+
+def _render(stage: Path, ref: FrameRef, result: Segmented, title: str) -> list[str]:
+    """Draw a frame: its range image and its bird's-eye / 3D views; the file names."""
+    from flic_cli.plots import render_frame_views, render_segmentation
+
+    names = [
+        f"render_{ref.sequence}_{ref.frame:06d}.png",
+        f"views_{ref.sequence}_{ref.frame:06d}.png",
+    ]
+    prep = result.prep
+    render_segmentation(prep.image, result.labels, result.ground, stage / names[0], title=title)
+    render_frame_views(
+        stage / names[1],
+        prep.points,
+        result.labels,
+        prep.labels,
+        result.ground_points(),
+        title=title,
+    )
+    return names
