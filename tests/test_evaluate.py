@@ -29,6 +29,8 @@ TABLES = [
     "by_distance.csv",
     "per_frame.csv",
     "per_object.csv",
+    "panoptic.csv",
+    "quality_speed.csv",
 ]
 #: Columns that hold wall-clock times, which differ between any two runs.
 TIMING = ["seconds", "ms_per_frame_median"]
@@ -398,3 +400,76 @@ def test_estimate_line() -> None:
     assert line.startswith("estimate from 3 frame(s): 1.2 s per frame (flic0 2 ms, dbscan 600 ms;")
     assert "scoring 500 ms) x 1000 frames = 20.0 min of one worker / 4 processes = 5.0 min" in line
     assert "dask worker threads" in estimate_line(timing, 10, jobs=1, scheduler="tcp://x:1")
+
+
+def test_table_intervals_hold_the_estimates(reference: Path) -> None:
+    table = _read(reference / "table.csv")
+    for col in ("iou_mu_no_ground", "iou_mu_ground", "p_mu"):
+        assert (table[f"{col}_low"] <= table[col]).all() and (
+            table[col] <= table[f"{col}_high"]
+        ).all()
+        assert (table[f"{col}_low"] < table[f"{col}_high"]).all()  # 3 frames: not degenerate
+
+
+def test_quality_speed_from_a_benchmark(reference: Path, sample_root: Path, tmp_path: Path) -> None:
+    qs = _read(reference / "quality_speed.csv")
+    table = _read(reference / "table.csv")
+    assert qs["method"].tolist() == table["method"].tolist()
+    np.testing.assert_array_equal(qs["iou_mu"], table["iou_mu_no_ground"])
+    assert (qs["timing"] == "flic evaluate (no-ground setting)").all()
+    assert (reference / "quality_speed.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    bench = tmp_path / "bench"
+    bench.mkdir()
+    pd.DataFrame({"method": ["flic1"], "median_ms": [0.25], "frames": [40]}).to_csv(
+        bench / "summary.csv", index=False
+    )
+    result = _evaluate(sample_root, tmp_path / "o", "--setting", "no-ground", "--runtimes", bench)
+    assert result.exit_code == 0, result.output
+    qs = _read(tmp_path / "o" / "quality_speed.csv").set_index("method")
+    assert qs.loc["flic1", "ms_per_frame_median"] == 0.25 and qs.loc["flic1", "frames_timed"] == 40
+    assert qs.loc["flic1", "timing"] == "flic benchmark"
+    assert qs.loc["flic14", "timing"].startswith("flic evaluate")  # not in the benchmark
+
+
+def test_oracle_panoptic_equals_scoring_what_segment_writes(
+    sample_root: Path, tmp_path: Path
+) -> None:
+    """`flic evaluate --semantics oracle` reports the PQ of exactly the files that
+    `flic segment --semantics oracle` writes (as semantic-kitti-api would score them)."""
+    from flic_cli.io import open_dataset, read_label
+    from flic_cli.metrics.panoptic import PanopticCounts, class_scores, panoptic_counts
+
+    result = _evaluate(sample_root, tmp_path / "e", "--methods", "flic14", "--semantics", "oracle")
+    assert result.exit_code == 0, result.output
+    seg = runner.invoke(
+        app,
+        [
+            "segment",
+            str(sample_root),
+            "--method",
+            "flic14",
+            "--semantics",
+            "oracle",
+            "--out",
+            str(tmp_path / "s"),
+        ],
+    )
+    assert seg.exit_code == 0, seg.output
+    counts = []
+    for ref in open_dataset(sample_root).refs():
+        pred = np.fromfile(
+            tmp_path / "s" / "sequences" / ref.sequence / "predictions" / f"{ref.frame:06d}.label",
+            dtype="<u4",
+        )
+        counts.append(panoptic_counts(read_label(ref.label_path), pred))
+    pooled = PanopticCounts.total(counts, 20)
+    scores = class_scores(pooled)
+    pan = _read(tmp_path / "e" / "panoptic.csv")
+    oracle = pan[pan["semantics"] == "oracle"].set_index("class")
+    from flic_cli.classes import LEARNING_NAMES
+
+    for c in range(1, 20):
+        row = oracle.loc[LEARNING_NAMES[c]]
+        assert row["pq"] == round(100 * scores["pq"][c], 2)
+        assert (row["tp"], row["fp"], row["fn"]) == (pooled.tp[c], pooled.fp[c], pooled.fn[c])
+    assert oracle.loc["person", "tp"] > 0  # the sample has people, and they are scored

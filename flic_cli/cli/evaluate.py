@@ -61,9 +61,11 @@ def _interrupted(out: Path, resumable: bool) -> None:
         "- `flic evaluate ~/kitti --out eval/ --resume` (continue an interrupted run)\n\n"
         "- `flic evaluate ~/kitti --scheduler tcp://head:8786 --out eval/` (dask cluster)\n\n"
         "Writes into OUT: `table.csv` (Table 1 layout), `per_setting.csv`, `per_sequence.csv`, "
-        "`by_class.csv`, `by_distance.csv` (0-20, 20-40, >40 m), `per_frame.csv` (clusters, "
-        "over-/under-segmentation, time) and `per_object.csv` (one row per GT object, IoU as a "
-        "fraction), `skipped.csv` with --skip-bad. Scores are in percent. `parts/` holds the "
+        "`by_class.csv`, `by_distance.csv` (0-20, 20-40, >40 m), `panoptic.csv` (PQ, SQ, RQ), "
+        "`quality_speed.csv` + `quality_speed.png` (IoU_mu against time per frame), "
+        "`per_frame.csv` (clusters, over-/under-segmentation, time) and `per_object.csv` (one "
+        "row per GT object, IoU as a fraction), `skipped.csv` with --skip-bad. Scores are in "
+        "percent, intervals are 95% bootstrap intervals over frames. `parts/` holds the "
         "per-frame results as they finish and `run.json` the run's parameters."
     )
 )
@@ -107,6 +109,21 @@ def evaluate(
     sequences: SequencesOpt = None,
     frames: FramesOpt = None,
     config: ConfigOpt = None,
+    semantics: Annotated[
+        str,
+        typer.Option(
+            help="`none`: panoptic quality class-agnostic (thing objects) only; `oracle`: also "
+            "per class with ground-truth semantics, exactly what semantic-kitti-api gives for "
+            "`flic segment --semantics oracle` (one more clustering per method and frame)."
+        ),
+    ] = "none",
+    runtimes: Annotated[
+        Path | None,
+        typer.Option(
+            help="A `flic benchmark` output folder (or its summary.csv): quality_speed.csv "
+            "takes its median times instead of this run's."
+        ),
+    ] = None,
 ) -> None:
     """Score methods with the paper's protocol (SPEC 4): GT objects are thing instances with at
     least 100 points, each takes its best-overlap cluster (one cluster, one object), IoU over 3D
@@ -145,6 +162,8 @@ def evaluate(
             skip_bad=skip_bad,
             on_start=started,
             on_estimate=lambda line: typer.echo(line, err=True),
+            semantics=semantics,
+            runtimes=runtimes,
         )
     except KeyboardInterrupt:
         _interrupted(out, resumable=True)

@@ -37,9 +37,21 @@ from flic_cli.runs.frames import FrameLoop, Skipped, sort_skipped, write_skipped
 from flic_cli.runs.output import check_output_dir
 from flic_cli.runs.parallel import resolve_jobs
 from flic_cli.runs.pipeline import build_segmenters
-from flic_cli.runs.scoring import FRAME_COLUMNS, OBJECT_COLUMNS, FrameScores, ScoreJob
+from flic_cli.runs.scoring import (
+    FRAME_COLUMNS,
+    OBJECT_COLUMNS,
+    PANOPTIC_COLUMNS,
+    FrameScores,
+    ScoreJob,
+)
 from flic_cli.runs.store import PARTS, open_store, read_parts, write_part
-from flic_cli.runs.tables import all_tables, frame_dtypes, object_dtypes
+from flic_cli.runs.tables import (
+    all_tables,
+    frame_dtypes,
+    object_dtypes,
+    panoptic_dtypes,
+    shown_table,
+)
 
 #: ``--setting`` of evaluate: one setting or both in one pass (each frame read once).
 EVAL_SETTINGS: dict[str, tuple[str, ...]] = {
@@ -127,10 +139,8 @@ class EvaluateResult:
     files: list[Path] = field(default_factory=list)
 
     def text(self) -> str:
-        """Caption and table, ready to print."""
-        shown = self.table.drop(columns=["p_setting"])
-        text = shown.to_string(index=False, na_rep="-", float_format=lambda v: f"{v:.2f}")
-        return f"{self.caption}\n{text}"
+        """Caption and table (each IoU_mu and P_mu with its 95% interval), ready to print."""
+        return f"{self.caption}\n{shown_table(self.table)}"
 
 
 def select_labelled(
@@ -200,6 +210,8 @@ def run_evaluate(
     progress: bool = True,
     on_start: Any = None,
     on_estimate: Any = None,
+    semantics: str = "none",
+    runtimes: Path | None = None,
 ) -> EvaluateResult:
     """Evaluate methods on every selected labelled frame and write the tables to ``out``.
 
@@ -223,6 +235,11 @@ def run_evaluate(
         the work starts (the CLI prints a line).
     on_estimate : called with a line estimating the run's duration, measured on its first
         :data:`CALIBRATION_FRAMES` frames, before the others start.
+    semantics : ``"none"`` (class-agnostic panoptic quality only) or ``"oracle"`` (also per class
+        with ground-truth semantics: what ``flic segment --semantics oracle`` writes, scored as
+        semantic-kitti-api scores it).
+    runtimes : a ``flic benchmark`` ``summary.csv`` whose median times go into
+        ``quality_speed.csv`` instead of the times measured by this run.
 
     Raises
     ------
@@ -233,6 +250,9 @@ def run_evaluate(
     # 1. what to evaluate, where to write
     if setting not in EVAL_SETTINGS:
         raise FlicInputError(None, f"--setting must be one of {', '.join(EVAL_SETTINGS)}")
+    if semantics not in ("none", "oracle"):
+        raise FlicInputError(None, f"--semantics must be none or oracle, got {semantics!r}")
+    bench = None if runtimes is None else read_runtimes(Path(runtimes))
     settings = EVAL_SETTINGS[setting]
     methods = list(dict.fromkeys(methods))
     refs, missing, folders = select_labelled(data, sequences, frames, skip_missing)
@@ -241,9 +261,11 @@ def run_evaluate(
     job = ScoreJob(
         tuple((s, tuple(build_segmenters(config, methods, s, ground_remover))) for s in settings),
         config.projection,
+        oracle=semantics == "oracle",
     )
     # 3. the resumable store
     params = run_parameters(data, config, methods, settings, ground_remover, sequences, frames)
+    params["semantics"] = semantics
     done = open_store(out, params, resume)
     todo = [r for r in refs if (r.sequence, r.frame) not in done]
     resumed = len(refs) - len(todo)
@@ -288,7 +310,7 @@ def run_evaluate(
     # 5. the tables, from the stored records of the selected frames
     bad = {(s.sequence, s.frame) for s in skipped}
     keys = [(r.sequence, r.frame) for r in refs if (r.sequence, r.frame) not in bad]
-    files = _write_tables(out, parts, keys, methods, settings)
+    files = _write_tables(out, parts, keys, methods, settings, semantics == "oracle", bench)
     if skipped:
         files.append(write_skipped(out / "skipped.csv", sort_skipped(skipped)))
     table = pd.read_csv(out / "table.csv")
@@ -304,14 +326,31 @@ def run_evaluate(
     )
 
 
+def read_runtimes(path: Path) -> pd.DataFrame:
+    """The ``method``, ``median_ms`` and ``frames`` of a ``flic benchmark`` ``summary.csv``."""
+    path = path / "summary.csv" if path.is_dir() else path
+    try:
+        df = pd.read_csv(path)
+    except (OSError, ValueError) as exc:
+        raise FlicInputError(path, f"cannot be read as a benchmark summary ({exc})") from None
+    missing = {"method", "median_ms", "frames"} - set(df.columns)
+    if missing:
+        raise FlicInputError(
+            path, f"is not a flic benchmark summary.csv (no {', '.join(sorted(missing))})"
+        )
+    return df[["method", "median_ms", "frames"]]
+
+
 def _write_tables(
     out: Path,
     parts: Path,
     keys: list[tuple[str, int]],
     methods: list[str],
     settings: tuple[str, ...],
+    oracle: bool,
+    runtimes: pd.DataFrame | None,
 ) -> list[Path]:
-    """Read the stored records of ``keys`` and write every table atomically."""
+    """Read the stored records of ``keys`` and write every table atomically, and the plot."""
     seqs = sorted({k[0] for k in keys})
     objects = read_parts(
         parts, keys, "objects", OBJECT_COLUMNS, object_dtypes(methods, settings, seqs)
@@ -322,11 +361,31 @@ def _write_tables(
     ).reset_index(drop=True)
     frames = frames.sort_values(["method", "setting", "sequence", "frame"], kind="stable")
     frames = frames.reset_index(drop=True)
+    panoptic = None
+    if oracle:
+        panoptic = read_parts(
+            parts, keys, "panoptic", PANOPTIC_COLUMNS, panoptic_dtypes(methods, seqs)
+        )
     files = []
-    for name, df in all_tables(objects, frames, methods, settings).items():
+    tables = all_tables(objects, frames, methods, settings, panoptic, runtimes)
+    for name, df in tables.items():
         with atomic_write(out / name) as tmp:
             df.to_csv(tmp, index=False)
         files.append(out / name)
+    from flic_cli.plots import plot_quality_speed
+
+    qs = tables["quality_speed.csv"]
+    plot_quality_speed(
+        qs["method"].tolist(),
+        qs["ms_per_frame_median"].to_numpy(),
+        qs["iou_mu"].to_numpy(),
+        out / "quality_speed.png",
+        qs["iou_mu_low"].to_numpy(),
+        qs["iou_mu_high"].to_numpy(),
+        title=f"IoU_mu ({qs['setting'].iloc[0]} setting, {len(keys)} frames) against time per "
+        f"frame ({qs['timing'].iloc[0]})",
+    )
+    files.append(out / "quality_speed.png")
     return files
 
 
@@ -336,7 +395,8 @@ def _caption(table: pd.DataFrame, n_frames: int, settings: tuple[str, ...], remo
     remover_text = {"paper": "the paper's", "own": "each method's own"}.get(remover, remover)
     return (
         f"SPEC 4 protocol, {n_frames} frames, {n_objects} GT objects (>= 100 points); "
-        f"IoU_mu and P_x in %, P_x from the {p_setting} setting"
+        f"IoU_mu and P_x in %, [95% bootstrap interval over frames], P_x from the {p_setting} "
+        "setting"
         + (
             f"; ground setting with {remover_text} ground extraction"
             if "ground" in settings

@@ -120,6 +120,44 @@ def prepare(
     return Prepared(frame.ref, image, points, labels, _in_file(frame.finite, keep), frame.n_read)
 
 
+def scan_semantics(frame: Frame, semantics: str) -> np.ndarray:
+    """(N_scan,) raw semantic class of every point of the scan as stored.
+
+    Parameters
+    ----------
+    frame : a SemanticKITTI frame (with labels for ``"oracle"``).
+    semantics : ``"oracle"`` (the ground truth's classes) or a folder of a semantic network's
+        predictions (see :mod:`flic_cli.semantics`).
+    """
+    from flic_cli.io import read_label
+    from flic_cli.semantics import oracle_semantics, read_semantics
+
+    ref = frame.ref
+    if semantics != "oracle":
+        return read_semantics(semantics, ref.sequence, ref.frame, frame.n_read)
+    if frame.labels is None or ref.label_path is None:
+        raise FlicInputError(ref.path, "--semantics oracle needs the frame's labels")
+    if frame.finite is None:
+        return oracle_semantics(frame.labels)
+    return oracle_semantics(read_label(ref.label_path, frame.n_read))  # dropped points too
+
+
+def prepare_semantic(frame: Frame, semantics: np.ndarray, projection: Projection) -> Prepared:
+    """The frame's points of thing classes, ready for clustering ("semantic network +
+    clustering": the semantic classes decide what is an object, the method separates them).
+
+    Parameters
+    ----------
+    frame : a loaded frame.
+    semantics : (N_scan,) raw classes of every point as stored (:func:`scan_semantics`).
+    projection : as for :func:`prepare`.
+    """
+    from flic_cli.semantics import cluster_mask
+
+    finite = semantics if frame.finite is None else semantics[frame.finite]
+    return prepare(frame, "ground", projection, only=cluster_mask(finite))
+
+
 def _in_file(finite: np.ndarray | None, keep: np.ndarray | None) -> np.ndarray | None:
     """``keep`` (over the finite points) as a mask over every point of the file."""
     if finite is None:

@@ -17,11 +17,18 @@ import numpy as np
 
 from flic_cli.classes import class_name
 from flic_cli.errors import FlicInputError
-from flic_cli.io import read_scan
+from flic_cli.io import read_label, read_scan
 from flic_cli.io.base import Frame, FrameRef
 from flic_cli.metrics import distance_band, match_objects, segmentation_stats
+from flic_cli.metrics.panoptic import agnostic_panoptic_counts
 from flic_cli.projection import Projection
-from flic_cli.runs.pipeline import Prepared, Segmenter, prepare
+from flic_cli.runs.pipeline import (
+    Prepared,
+    Segmenter,
+    prepare,
+    prepare_semantic,
+    scan_semantics,
+)
 
 #: Columns of the per-object records (``per_object.csv``).
 OBJECT_COLUMNS: tuple[str, ...] = (
@@ -52,6 +59,25 @@ FRAME_COLUMNS: tuple[str, ...] = (
     "over_segmented",
     "under_segmented",
     "seconds",
+    "pq_tp",
+    "pq_fp",
+    "pq_fn",
+    "pq_iou_sum",
+)
+
+#: Columns of the per-class panoptic counts with oracle semantics (``--semantics oracle``).
+PANOPTIC_COLUMNS: tuple[str, ...] = (
+    "method",
+    "sequence",
+    "frame",
+    "class",
+    "tp",
+    "fp",
+    "fn",
+    "iou_sum",
+    "sem_tp",
+    "sem_fp",
+    "sem_fn",
 )
 
 
@@ -63,10 +89,14 @@ class FrameScores:
     frame: int
     objects: dict[str, list] = field(default_factory=lambda: {c: [] for c in OBJECT_COLUMNS})
     frames: dict[str, list] = field(default_factory=lambda: {c: [] for c in FRAME_COLUMNS})
+    panoptic: dict[str, list] | None = None
 
     def tables(self) -> dict[str, tuple[tuple[str, ...], dict[str, list]]]:
         """The records by part name, with their columns (the ``frames`` part last)."""
-        return {"objects": (OBJECT_COLUMNS, self.objects), "frames": (FRAME_COLUMNS, self.frames)}
+        out = {"objects": (OBJECT_COLUMNS, self.objects), "frames": (FRAME_COLUMNS, self.frames)}
+        if self.panoptic is not None:
+            out["panoptic"] = (PANOPTIC_COLUMNS, self.panoptic)
+        return out
 
 
 def load_labelled_frame(ref: FrameRef) -> Frame:
@@ -95,10 +125,14 @@ class ScoreJob:
     ----------
     segmenters : per setting (``"no-ground"``, ``"ground"``), the segmenters to run.
     projection : how scans become range images.
+    oracle : also score every method with oracle semantics: its clusters of the ground truth's
+        thing-class points, per class, the way semantic-kitti-api scores
+        ``flic segment --semantics oracle`` (:func:`flic_cli.metrics.panoptic.panoptic_counts`).
     """
 
     segmenters: tuple[tuple[str, tuple[Segmenter, ...]], ...]
     projection: Projection
+    oracle: bool = False
 
     def __call__(self, ref: FrameRef) -> FrameScores:
         frame = load_labelled_frame(ref)
@@ -112,7 +146,46 @@ class ScoreJob:
                 labels = seg.method.segment(prep.image, prep.points, ground)
                 seconds = time.perf_counter() - start + ground_seconds
                 add_scores(out, seg.name, setting, prep, labels, seconds)
+        if self.oracle:
+            out.panoptic = oracle_panoptic(frame, self.segmenters[0][1], self.projection)
         return out
+
+
+def oracle_panoptic(
+    frame: Frame, segmenters: tuple[Segmenter, ...], projection: Projection
+) -> dict[str, list]:
+    """Per-class panoptic counts of every method with oracle semantics, on one frame.
+
+    The prediction is exactly what ``flic segment --semantics oracle`` writes (the same
+    :func:`flic_cli.runs.pipeline.prepare_semantic` and :func:`flic_cli.semantics.combine`), and
+    it is scored against the labels of every point of the scan as stored.
+    """
+    from flic_cli.metrics.panoptic import panoptic_counts
+    from flic_cli.semantics import combine
+
+    semantics = scan_semantics(frame, "oracle")
+    gt = semantics_labels(frame)
+    prep = prepare_semantic(frame, semantics, projection)
+    rows: dict[str, list] = {c: [] for c in PANOPTIC_COLUMNS}
+    for seg in segmenters:
+        labels = seg.method.segment(prep.image, prep.points, None)
+        counts = panoptic_counts(gt, combine(semantics, prep.scan_labels(labels)))
+        n = len(counts)
+        rows["method"] += [seg.name] * n
+        rows["sequence"] += [frame.ref.sequence] * n
+        rows["frame"] += [frame.ref.frame] * n
+        rows["class"] += list(range(n))
+        for key, values in counts.as_dict().items():
+            rows[key] += values.tolist()
+    return rows
+
+
+def semantics_labels(frame: Frame) -> np.ndarray:
+    """The ground-truth labels of every point of the scan as stored (NaN points included)."""
+    assert frame.labels is not None and frame.ref.label_path is not None
+    if frame.finite is None:
+        return frame.labels
+    return read_label(frame.ref.label_path, frame.n_read)
 
 
 class GroundCache:
@@ -146,6 +219,7 @@ def add_scores(
     assert prep.labels is not None  # load_labelled_frame guarantees labels
     matches = match_objects(prep.labels, labels, prep.points)
     stats = segmentation_stats(prep.labels, labels)
+    pq = agnostic_panoptic_counts(prep.labels, labels)
     n = len(matches)
     obj = out.objects
     obj["method"] += [method] * n
@@ -172,5 +246,9 @@ def add_scores(
         ("over_segmented", stats["over_segmented"]),
         ("under_segmented", stats["under_segmented"]),
         ("seconds", round(seconds, 6)),
+        ("pq_tp", int(pq.tp[0])),
+        ("pq_fp", int(pq.fp[0])),
+        ("pq_fn", int(pq.fn[0])),
+        ("pq_iou_sum", float(pq.iou_sum[0])),
     ):
         out.frames[key].append(value)

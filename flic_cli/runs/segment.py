@@ -23,14 +23,21 @@ import numpy as np
 
 from flic_cli.config import Config
 from flic_cli.errors import FlicInputError
-from flic_cli.io import open_dataset, read_label
+from flic_cli.io import open_dataset
 from flic_cli.io.atomic import staged_folder
-from flic_cli.io.base import Frame, FrameRef
+from flic_cli.io.base import FrameRef
 from flic_cli.io.ply import write_ply
 from flic_cli.projection import Projection
 from flic_cli.runs.frames import FrameLoop, Skipped, sort_skipped, write_skipped
 from flic_cli.runs.output import check_output_dir
-from flic_cli.runs.pipeline import Prepared, Segmenter, build_segmenter, prepare
+from flic_cli.runs.pipeline import (
+    Prepared,
+    Segmenter,
+    build_segmenter,
+    prepare,
+    prepare_semantic,
+    scan_semantics,
+)
 
 #: ``--semantics`` values besides a folder of a semantic network's predictions.
 SEMANTICS = ("none", "oracle")
@@ -91,26 +98,10 @@ class SegmentJob:
             prep = prepare(frame, self.setting, self.projection)
             labels, ground = self.segmenter(prep.image, prep.points)
             return Segmented(prep, labels, ground)
-        from flic_cli.semantics import cluster_mask
-
-        semantics = scan_semantics(ref, frame, self.semantics)
-        finite = semantics if frame.finite is None else semantics[frame.finite]
-        prep = prepare(frame, "ground", self.projection, only=cluster_mask(finite))
+        semantics = scan_semantics(frame, self.semantics)
+        prep = prepare_semantic(frame, semantics, self.projection)
         labels = self.segmenter.method.segment(prep.image, prep.points, None)
         return Segmented(prep, labels, None, semantics)
-
-
-def scan_semantics(ref: FrameRef, frame: Frame, semantics: str) -> np.ndarray:
-    """(N_scan,) raw semantic class of every point of the scan as stored (``--semantics``)."""
-    from flic_cli.semantics import oracle_semantics, read_semantics
-
-    if semantics != "oracle":
-        return read_semantics(semantics, ref.sequence, ref.frame, frame.n_read)
-    if frame.finite is None:
-        assert frame.labels is not None  # the dataset was opened with require_labels
-        return oracle_semantics(frame.labels)
-    assert ref.label_path is not None
-    return oracle_semantics(read_label(ref.label_path, frame.n_read))  # dropped points too
 
 
 @dataclass

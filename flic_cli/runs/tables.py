@@ -3,7 +3,12 @@
 Scores are in percent with two decimals, as in the paper:
 
 - ``table.csv``: the paper's Table 1, one row per method (IoU_mu no ground, IoU_mu ground, P_mu,
-  P_0.50, P_0.75, P_0.95 from the no-ground setting when it was run, else from ground);
+  P_0.50, P_0.75, P_0.95 from the no-ground setting when it was run, else from ground), with the
+  95% bootstrap intervals of IoU_mu and P_mu (frames resampled, :mod:`flic_cli.metrics.intervals`);
+- ``panoptic.csv``: panoptic quality (PQ, SQ, RQ, with semantic-kitti-api's conventions,
+  :mod:`flic_cli.metrics.panoptic`): class-agnostic over the thing objects for every method and
+  setting, with the interval of PQ; with oracle semantics also per class and their means;
+- ``quality_speed.csv``: IoU_mu (with its interval) against the median time per frame;
 - ``per_setting.csv``: every P_x and the segmentation statistics per method and setting;
 - ``per_sequence.csv``, ``by_class.csv``, ``by_distance.csv``: the same scores per sequence, per
   semantic class and per range band of the object's centroid (0-20, 20-40, >40 m).
@@ -18,12 +23,19 @@ import pandas as pd
 
 from flic_cli.classes import CLASS_NAMES
 from flic_cli.metrics import DISTANCE_BANDS, IOU_THRESHOLDS, summarize
+from flic_cli.metrics.intervals import (
+    Interval,
+    frame_sums,
+    iou_mu_interval,
+    p_mu_interval,
+    pq_interval,
+)
 
 #: Score columns of the summary tables, in percent.
 P_COLUMNS: tuple[str, ...] = tuple(f"p_{x:.2f}" for x in IOU_THRESHOLDS)
 SCORE_COLUMNS: tuple[str, ...] = ("iou_mu", "p_mu", *P_COLUMNS)
 
-#: Columns of ``table.csv``.
+#: Columns of ``table.csv`` (``*_low``/``*_high``: the 95% bootstrap interval).
 TABLE_COLUMNS: tuple[str, ...] = (
     "method",
     "iou_mu_no_ground",
@@ -34,6 +46,41 @@ TABLE_COLUMNS: tuple[str, ...] = (
     "p_0.95",
     "objects",
     "p_setting",
+    "iou_mu_no_ground_low",
+    "iou_mu_no_ground_high",
+    "iou_mu_ground_low",
+    "iou_mu_ground_high",
+    "p_mu_low",
+    "p_mu_high",
+)
+
+#: Columns of ``panoptic.csv``.
+PANOPTIC_TABLE_COLUMNS: tuple[str, ...] = (
+    "method",
+    "semantics",
+    "setting",
+    "class",
+    "pq",
+    "sq",
+    "rq",
+    "iou",
+    "tp",
+    "fp",
+    "fn",
+    "pq_low",
+    "pq_high",
+)
+
+#: Columns of ``quality_speed.csv``.
+QUALITY_SPEED_COLUMNS: tuple[str, ...] = (
+    "method",
+    "setting",
+    "iou_mu",
+    "iou_mu_low",
+    "iou_mu_high",
+    "ms_per_frame_median",
+    "frames_timed",
+    "timing",
 )
 
 
@@ -73,6 +120,22 @@ def frame_dtypes(methods: list[str], settings: tuple[str, ...], seqs: list[str])
         "over_segmented": "int64",
         "under_segmented": "int64",
         "seconds": "float64",
+        "pq_tp": "int64",
+        "pq_fp": "int64",
+        "pq_fn": "int64",
+        "pq_iou_sum": "float64",
+    }
+
+
+def panoptic_dtypes(methods: list[str], seqs: list[str]) -> dict:
+    """Column dtypes of the per-class panoptic counts (oracle semantics)."""
+    return {
+        "method": pd.CategoricalDtype(methods, ordered=True),
+        "sequence": pd.CategoricalDtype(seqs, ordered=True),
+        "frame": "int64",
+        "class": "int64",
+        **{k: "int64" for k in ("tp", "fp", "fn", "sem_tp", "sem_fp", "sem_fn")},
+        "iou_sum": "float64",
     }
 
 
@@ -136,23 +199,44 @@ def grouped(
     return pd.DataFrame(rows, columns=cols)
 
 
+def intervals(objects: pd.DataFrame) -> dict[tuple[str, str], dict[str, Interval]]:
+    """95% bootstrap intervals of IoU_mu and P_mu per (method, setting), resampling frames."""
+    out = {}
+    for (method, setting), group in objects.groupby(["method", "setting"], observed=True):
+        keys = (group["sequence"].astype(str) + "/" + group["frame"].astype(str)).to_numpy()
+        sums = frame_sums(keys, group["iou"].to_numpy())
+        out[(str(method), str(setting))] = {
+            "iou_mu": iou_mu_interval(sums["iou_sum"], sums["objects"]),
+            "p_mu": p_mu_interval(sums["p_sum"], sums["objects"]),
+        }
+    return out
+
+
 def paper_table(
-    per_setting: pd.DataFrame, methods: list[str], settings: tuple[str, ...]
+    per_setting: pd.DataFrame,
+    methods: list[str],
+    settings: tuple[str, ...],
+    cis: dict[tuple[str, str], dict[str, Interval]] | None = None,
 ) -> pd.DataFrame:
     """The paper's Table 1 layout from ``per_setting`` rows (scores in percent).
 
     P_x come from the no-ground setting when it was evaluated (the paper's Table 1 gives them on
     the ground-truth ground removed clouds), else from the ground setting; column ``p_setting``
-    says which.
+    says which. ``cis`` (from :func:`intervals`) fills the ``*_low``/``*_high`` columns.
     """
     p_setting = "no-ground" if "no-ground" in settings else "ground"
     index = per_setting.set_index(["method", "setting"])
+    cis = cis or {}
     rows = []
     for name in methods:
 
         def get(setting: str, col: str, name: str = name) -> Any:
             key = (name, setting)
             return index.loc[key, col] if key in index.index else float("nan")
+
+        def bound(setting: str, score: str, end: str, name: str = name) -> float:
+            ci = cis.get((name, setting), {}).get(score)
+            return percent(getattr(ci, end)) if ci is not None else float("nan")
 
         objects = get(p_setting, "objects")
         rows.append(
@@ -166,9 +250,165 @@ def paper_table(
                 "p_0.95": get(p_setting, "p_0.95"),
                 "objects": int(objects) if pd.notna(objects) else 0,
                 "p_setting": p_setting,
+                "iou_mu_no_ground_low": bound("no-ground", "iou_mu", "low"),
+                "iou_mu_no_ground_high": bound("no-ground", "iou_mu", "high"),
+                "iou_mu_ground_low": bound("ground", "iou_mu", "low"),
+                "iou_mu_ground_high": bound("ground", "iou_mu", "high"),
+                "p_mu_low": bound(p_setting, "p_mu", "low"),
+                "p_mu_high": bound(p_setting, "p_mu", "high"),
             }
         )
     return pd.DataFrame(rows, columns=list(TABLE_COLUMNS))
+
+
+def shown_table(table: pd.DataFrame) -> str:
+    """``table.csv`` as printed: each IoU_mu and P_mu with its interval in brackets."""
+    shown = pd.DataFrame({"method": table["method"]})
+    for col in ("iou_mu_no_ground", "iou_mu_ground", "p_mu"):
+        low, high = table[f"{col}_low"], table[f"{col}_high"]
+        shown[col] = [
+            "-" if pd.isna(v) else f"{v:.2f}" + ("" if pd.isna(lo) else f" [{lo:.1f}, {hi:.1f}]")
+            for v, lo, hi in zip(table[col], low, high, strict=True)
+        ]
+    for col in ("p_0.50", "p_0.75", "p_0.95"):
+        shown[col] = ["-" if pd.isna(v) else f"{v:.2f}" for v in table[col]]
+    shown["objects"] = table["objects"]
+    return shown.to_string(index=False)
+
+
+def panoptic_table(
+    frames: pd.DataFrame, oracle: pd.DataFrame | None, methods: list[str]
+) -> pd.DataFrame:
+    """``panoptic.csv``: class-agnostic PQ per method and setting (from the per-frame counts),
+    and with oracle semantics per class and their means (scores in percent)."""
+    from flic_cli.classes import LEARNING_NAMES, LEARNING_STUFF, LEARNING_THINGS
+    from flic_cli.metrics.panoptic import (
+        PanopticCounts,
+        class_scores,
+        panoptic_summary,
+        pq_sq_rq,
+    )
+
+    rows = []
+    for (method, setting), g in frames.groupby(["method", "setting"], observed=True, sort=True):
+        tp, fp, fn, iou = (
+            int(g["pq_tp"].sum()),
+            int(g["pq_fp"].sum()),
+            int(g["pq_fn"].sum()),
+            float(g["pq_iou_sum"].sum()),
+        )
+        pq, sq, rq = pq_sq_rq(tp, fp, fn, iou)
+        ci = pq_interval(g["pq_iou_sum"], g["pq_tp"], g["pq_fp"], g["pq_fn"])
+        rows.append(
+            {
+                "method": method,
+                "semantics": "none",
+                "setting": setting,
+                "class": "things",
+                "pq": percent(pq),
+                "sq": percent(sq),
+                "rq": percent(rq),
+                "iou": float("nan"),
+                "tp": tp,
+                "fp": fp,
+                "fn": fn,
+                "pq_low": percent(ci.low),
+                "pq_high": percent(ci.high),
+            }
+        )
+    if oracle is not None:
+        names = LEARNING_NAMES
+        for method in methods:
+            g = oracle[oracle["method"] == method]
+            if g.empty:
+                continue
+            n = len(names)
+            by_class = g.groupby("class")
+            counts = PanopticCounts(
+                *(
+                    by_class[f].sum().reindex(range(n), fill_value=0).to_numpy()
+                    for f in ("tp", "fp", "fn", "iou_sum", "sem_tp", "sem_fp", "sem_fn")
+                )
+            )
+            scores = class_scores(counts)
+            for c in range(1, n):
+                gc = g[g["class"] == c]
+                ci = pq_interval(gc["iou_sum"], gc["tp"], gc["fp"], gc["fn"])
+                rows.append(
+                    {
+                        "method": method,
+                        "semantics": "oracle",
+                        "setting": "-",
+                        "class": names[c],
+                        "pq": percent(scores["pq"][c]),
+                        "sq": percent(scores["sq"][c]),
+                        "rq": percent(scores["rq"][c]),
+                        "iou": percent(scores["iou"][c]),
+                        "tp": int(counts.tp[c]),
+                        "fp": int(counts.fp[c]),
+                        "fn": int(counts.fn[c]),
+                        "pq_low": percent(ci.low),
+                        "pq_high": percent(ci.high),
+                    }
+                )
+            summary = panoptic_summary(counts)
+            every = list(range(1, n))
+            for label, pq, sq, rq, iou, members in (
+                ("mean", "pq_mean", "sq_mean", "rq_mean", "iou_mean", every),
+                ("things", "pq_things", "sq_things", "rq_things", None, list(LEARNING_THINGS)),
+                ("stuff", "pq_stuff", "sq_stuff", "rq_stuff", None, list(LEARNING_STUFF)),
+                ("mean (PQ dagger)", "pq_dagger", None, None, None, every),
+            ):
+                rows.append(
+                    {
+                        "method": method,
+                        "semantics": "oracle",
+                        "setting": "-",
+                        "class": label,
+                        "pq": percent(summary[pq]),
+                        "sq": percent(summary[sq]) if sq else float("nan"),
+                        "rq": percent(summary[rq]) if rq else float("nan"),
+                        "iou": percent(summary[iou]) if iou else float("nan"),
+                        "tp": int(counts.tp[members].sum()),
+                        "fp": int(counts.fp[members].sum()),
+                        "fn": int(counts.fn[members].sum()),
+                        "pq_low": float("nan"),
+                        "pq_high": float("nan"),
+                    }
+                )
+    return pd.DataFrame(rows, columns=list(PANOPTIC_TABLE_COLUMNS))
+
+
+def quality_speed_table(
+    table: pd.DataFrame, frames: pd.DataFrame, runtimes: pd.DataFrame | None = None
+) -> pd.DataFrame:
+    """``quality_speed.csv``: IoU_mu (the P setting's, with its interval) against the median
+    time per frame: from a ``flic benchmark`` summary when given (``runtimes``), else from the
+    evaluate run itself (the same setting; less controlled: other work shares the cores)."""
+    rows = []
+    for _, row in table.iterrows():
+        setting = row["p_setting"]
+        key = "no_ground" if setting == "no-ground" else "ground"
+        if runtimes is not None and row["method"] in set(runtimes["method"]):
+            bench = runtimes.set_index("method").loc[row["method"]]
+            ms, n, timing = float(bench["median_ms"]), int(bench["frames"]), "flic benchmark"
+        else:
+            sel = frames[(frames["method"] == row["method"]) & (frames["setting"] == setting)]
+            ms = 1000.0 * float(sel["seconds"].median()) if len(sel) else float("nan")
+            n, timing = len(sel), f"flic evaluate ({setting} setting)"
+        rows.append(
+            {
+                "method": row["method"],
+                "setting": setting,
+                "iou_mu": row[f"iou_mu_{key}"],
+                "iou_mu_low": row[f"iou_mu_{key}_low"],
+                "iou_mu_high": row[f"iou_mu_{key}_high"],
+                "ms_per_frame_median": round(ms, 4),
+                "frames_timed": n,
+                "timing": timing,
+            }
+        )
+    return pd.DataFrame(rows, columns=list(QUALITY_SPEED_COLUMNS))
 
 
 def all_tables(
@@ -176,9 +416,12 @@ def all_tables(
     frames: pd.DataFrame,
     methods: list[str],
     settings: tuple[str, ...],
+    oracle: pd.DataFrame | None = None,
+    runtimes: pd.DataFrame | None = None,
 ) -> dict[str, pd.DataFrame]:
     """Every table of ``flic evaluate`` by file name (``table.csv`` last)."""
     per_setting = grouped(objects, ["method", "setting"], frames)
+    table = paper_table(per_setting, methods, settings, intervals(objects))
     return {
         "per_object.csv": objects,
         "per_frame.csv": frames,
@@ -186,5 +429,7 @@ def all_tables(
         "per_sequence.csv": grouped(objects, ["method", "setting", "sequence"], frames),
         "by_class.csv": grouped(objects, ["method", "setting", "class", "class_name"]),
         "by_distance.csv": grouped(objects, ["method", "setting", "band"]),
-        "table.csv": paper_table(per_setting, methods, settings),
+        "panoptic.csv": panoptic_table(frames, oracle, methods),
+        "quality_speed.csv": quality_speed_table(table, frames, runtimes),
+        "table.csv": table,
     }
