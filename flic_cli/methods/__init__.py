@@ -2,7 +2,7 @@
 (see :class:`flic_cli.methods.base.Method`) registered in ``KINDS`` under the ``kind`` name that
 config files use."""
 
-from flic_cli.methods.base import Method, drop_small
+from flic_cli.methods.base import Method, drop_small, pixel_point_counts
 from flic_cli.methods.bogoslavskyi import Bogoslavskyi, bogoslavskyi_labels
 from flic_cli.methods.dbscan import Dbscan, dbscan_labels
 from flic_cli.methods.flic import Flic, flic_labels
@@ -19,4 +19,5 @@ __all__ = [
     "dbscan_labels",
     "drop_small",
     "flic_labels",
+    "pixel_point_counts",
 ]
