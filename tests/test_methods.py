@@ -318,3 +318,36 @@ def test_min_size_counts_points_not_pixels():
 def test_drop_small_with_weights():
     out = drop_small(np.array([5, 5, 0, 3, 3, 9]), 3, weights=np.array([1, 1, 7, 1, 1, 3]))
     np.testing.assert_array_equal(out, [0, 0, 0, 0, 0, 1])
+
+
+def test_dbscan_backends_agree_on_a_random_cloud():
+    pytest.importorskip(
+        "dbscan", reason="the fastdbscan backend needs pip install 'flic[fastdbscan]'"
+    )
+    from flic_cli.methods.dbscan import raw_dbscan
+
+    # blobs of different density plus uniform noise; coordinates on a 1/1024 m grid shifted by
+    # 1/2048 m, so that no two points are exactly eps apart (where the backends may differ)
+    rng = np.random.default_rng(1)
+    centres = rng.uniform(-20, 20, (12, 3))
+    blobs = [rng.normal(c, rng.uniform(0.1, 0.4), (rng.integers(20, 300), 3)) for c in centres]
+    pts = np.vstack([*blobs, rng.uniform(-25, 25, (400, 3))])
+    pts = np.round(pts * 1024) / 1024 + 1 / 2048
+    ref_raw, ref_core = raw_dbscan(pts, 0.5, 5, "sklearn")
+    raw, core = raw_dbscan(pts, 0.5, 5, "fastdbscan")
+    np.testing.assert_array_equal(core, ref_core)
+    # core points: the same partition; a border point may join any cluster it touches
+    from sklearn.metrics import adjusted_rand_score
+
+    assert adjusted_rand_score(ref_raw[ref_core], raw[core]) == 1.0
+    np.testing.assert_array_equal(raw < 0, ref_raw < 0)
+    ref = dbscan_labels(pts, 0.5, 5, 50)
+    fast = dbscan_labels(pts, 0.5, 5, 50, backend="fastdbscan")
+    assert ref.max() >= 5 and adjusted_rand_score(ref, fast) > 0.99
+
+
+def test_dbscan_backend_is_validated():
+    from flic_cli.methods import Dbscan
+
+    with pytest.raises(ValueError, match="backend"):
+        Dbscan(backend="cuda")
