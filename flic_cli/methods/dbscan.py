@@ -13,10 +13,10 @@ Measured on the 50 shared frames, no-ground point sets, one thread each, same pr
 198 ms (scikit-learn) against 44 ms (the package), 4.4 times faster; adjusted Rand index of the
 final labels >= 0.9936, IoU_mu 86.38 against 86.38, P_mu equal. Of 2.4 million points, 873 end in
 another cluster or in noise. Among them: 710 border points within ``eps`` of core points of two
-clusters, given to the other one (DBSCAN leaves that open), and 114 points that scikit-learn takes as core points but the
-package does not (110 of them with exactly ``min_samples`` neighbours within ``eps``, none closer
-than 7e-5 m to ``eps``; the package's answer there depends on points far away), which turns 78
-border points into noise.
+clusters, given to the other one (DBSCAN leaves that open), and 114 points that scikit-learn takes
+as core points but the package does not (110 of them with exactly ``min_samples`` neighbours
+within ``eps``, none closer than 7e-5 m to ``eps``; the package's answer there depends on points
+far away), which turns 78 border points into noise.
 """
 
 from __future__ import annotations
