@@ -13,7 +13,7 @@ Nodes: the pixels of ``mask`` with a range ``d > 0`` (a *measurement*). A measur
 
     t_p = max(threshold_m, d_p * sin(gamma_deg))
 
-(fixed near the sensor; beyond ``threshold_m / sin(gamma)`` -- 11.5 m with the defaults -- it
+(fixed near the sensor; beyond ``threshold_m / sin(gamma)`` -- 10 m with the defaults -- it
 grows with the range like the spacing of the beams, so that sparse far objects stay whole).
 
 A *walk* from ``p`` in direction ``(dr, dc)`` visits ``q_k = (r + k dr, (c + k dc) mod W)`` for
@@ -272,7 +272,7 @@ def bridge_kernel(
 def bridge_labels(
     ranges: np.ndarray,
     elevation: np.ndarray,
-    threshold_m: float = 0.4,
+    threshold_m: float = 0.35,
     gamma_deg: float = 2.0,
     reach_px: int = 12,
     min_size: int = 100,
@@ -326,7 +326,7 @@ class Bridge:
     min_size : smallest cluster kept, points of the evaluated set (a pixel counts its points).
     """
 
-    threshold_m: Annotated[float, Field(gt=0, description="link distance near, metres")] = 0.4
+    threshold_m: Annotated[float, Field(gt=0, description="link distance near, metres")] = 0.35
     gamma_deg: Annotated[
         float, Field(ge=0, lt=30, description="far link distance d sin(gamma), degrees")
     ] = 2.0
