@@ -51,6 +51,10 @@ METHODS: dict[str, Entry] = {
         "flic_cli.methods.bogoslavskyi:Bogoslavskyi", "Bogoslavskyi & Stachniss' angle criterion"
     ),
     "dbscan": Entry("flic_cli.methods.dbscan:Dbscan", "DBSCAN on the 3D points"),
+    "bridge": Entry(
+        "flic_cli.methods.bridge:Bridge",
+        "flic's hole-bridging clusterer: links to the nearest linkable measurement",
+    ),
 }
 
 #: Ground removers (``[ground.NAME]`` tables, ``--ground-remover NAME``).

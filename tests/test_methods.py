@@ -50,7 +50,7 @@ def canonical(labels: np.ndarray) -> np.ndarray:
     return out.reshape(labels.shape)
 
 
-def brute_force(ranges, valid, pairs, linked, min_size):
+def brute_force(ranges, valid, pairs, linked, min_size, weights=None):
     h, w = ranges.shape
     a, b = [], []
     for (r1, c1), (r2, c2) in pairs:
@@ -62,7 +62,15 @@ def brute_force(ranges, valid, pairs, linked, min_size):
     _, comp = connected_components(graph, directed=False)
     comp = comp + 1
     comp[~valid.reshape(-1)] = 0
-    return canonical(drop_small(comp, min_size).reshape(h, w))
+    if weights is None:
+        return canonical(drop_small(comp, min_size).reshape(h, w))
+    # the minimum size in points: sum the weights of every component by hand
+    sizes: dict[int, int] = {}
+    for i, c in enumerate(comp):
+        if c > 0:
+            sizes[int(c)] = sizes.get(int(c), 0) + int(weights.reshape(-1)[i])
+    kept = np.array([c if c > 0 and sizes[int(c)] >= min_size else 0 for c in comp])
+    return canonical(kept.reshape(h, w))
 
 
 @st.composite
@@ -79,6 +87,18 @@ def range_images(draw):
     return ranges.astype(np.float32), elevation
 
 
+@st.composite
+def pixel_weights(draw, shape):
+    """None (count pixels), all ones, or random points per pixel (0..5)."""
+    kind = draw(st.sampled_from(["none", "ones", "random"]))
+    if kind == "none":
+        return None
+    if kind == "ones":
+        return np.ones(shape, np.int32)
+    seed = draw(st.integers(0, 2**32 - 1))
+    return np.random.default_rng(seed).integers(0, 6, shape).astype(np.int32)
+
+
 maps_strategy = st.lists(
     st.tuples(st.integers(1, 4), st.integers(1, 5), st.integers(0, 3), st.integers(0, 4)),
     max_size=3,
@@ -91,11 +111,15 @@ maps_strategy = st.lists(
     threshold=st.floats(0.3, 3.0),
     maps=maps_strategy,
     mc_mode=st.sampled_from(["map", "neighbour"]),
-    min_size=st.integers(1, 4),
+    min_size=st.integers(1, 12),
+    data=st.data(),
 )
-def test_flic_equals_components_of_3d_distance_graph(image, threshold, maps, mc_mode, min_size):
+def test_flic_equals_components_of_3d_distance_graph(
+    image, threshold, maps, mc_mode, min_size, data
+):
     ranges, elevation = image
     h, w = ranges.shape
+    weights = data.draw(pixel_weights((h, w)))
     maps = [m[:2] if m[2] == m[3] == 0 else m for m in maps]
     pts = xyz_of(ranges, elevation)
     valid = ranges > 0
@@ -106,10 +130,11 @@ def test_flic_equals_components_of_3d_distance_graph(image, threshold, maps, mc_
         dist[(r1, c1, r2, c2)] = d
         return d < threshold
 
-    expected = brute_force(ranges, valid, neighbour_pairs(h, w, maps, mc_mode), linked, min_size)
+    pairs = neighbour_pairs(h, w, maps, mc_mode)
+    expected = brute_force(ranges, valid, pairs, linked, min_size, weights)
     # float32 ranges vs float64 coordinates: stay away from exact ties with the threshold
     assume(all(abs(d - threshold) > 1e-4 for d in dist.values()))
-    got = flic_labels(ranges, elevation, threshold, min_size, tuple(maps), mc_mode)
+    got = flic_labels(ranges, elevation, threshold, min_size, tuple(maps), mc_mode, None, weights)
     np.testing.assert_array_equal(canonical(got), expected)
     np.testing.assert_array_equal(got, canonical(got))  # numbered 1..K in raster order
 
@@ -120,21 +145,26 @@ def test_flic_equals_components_of_3d_distance_graph(image, threshold, maps, mc_
     threshold=st.floats(0.3, 3.0),
     maps=maps_strategy,
     mc_mode=st.sampled_from(["map", "neighbour"]),
-    min_size=st.integers(1, 4),
+    min_size=st.integers(1, 12),
+    data=st.data(),
 )
-def test_scipy_reference_equals_the_kernel(image, threshold, maps, mc_mode, min_size):
+def test_scipy_reference_equals_the_kernel(image, threshold, maps, mc_mode, min_size, data):
     ranges, elevation = image
+    weights = data.draw(pixel_weights(ranges.shape))
     maps = tuple(m[:2] if m[2] == m[3] == 0 else m for m in maps)
-    fast = flic_labels(ranges, elevation, threshold, min_size, maps, mc_mode)
-    ref = flic_labels_scipy(ranges, elevation, threshold, min_size, maps, mc_mode)
+    fast = flic_labels(ranges, elevation, threshold, min_size, maps, mc_mode, None, weights)
+    ref = flic_labels_scipy(ranges, elevation, threshold, min_size, maps, mc_mode, None, weights)
     np.testing.assert_array_equal(ref, fast)
 
 
 @settings(max_examples=200, deadline=None)
-@given(image=range_images(), angle=st.floats(2.0, 60.0), min_size=st.integers(1, 3))
-def test_bogoslavskyi_equals_components_of_atan2_graph(image, angle, min_size):
+@given(
+    image=range_images(), angle=st.floats(2.0, 60.0), min_size=st.integers(1, 12), data=st.data()
+)
+def test_bogoslavskyi_equals_components_of_atan2_graph(image, angle, min_size, data):
     ranges, elevation = image
     h, w = ranges.shape
+    weights = data.draw(pixel_weights((h, w)))
     theta = np.radians(angle)
     pts = xyz_of(ranges, elevation)
     betas = []
@@ -146,9 +176,10 @@ def test_bogoslavskyi_equals_components_of_atan2_graph(image, angle, min_size):
         betas.append(beta)
         return beta > theta
 
-    expected = brute_force(ranges, ranges > 0, neighbour_pairs(h, w, [], "map"), linked, min_size)
+    pairs = neighbour_pairs(h, w, [], "map")
+    expected = brute_force(ranges, ranges > 0, pairs, linked, min_size, weights)
     assume(all(abs(b - theta) > 1e-5 for b in betas))
-    got = bogoslavskyi_labels(ranges, elevation, angle, min_size)
+    got = bogoslavskyi_labels(ranges, elevation, angle, min_size, None, weights)
     np.testing.assert_array_equal(canonical(got), expected)
 
 
@@ -240,3 +271,90 @@ def test_unknown_backend_is_refused(tmp_path):
         match=r"bad.toml: \[methods.flic0\] backend: Input should be 'numba' or 'scipy'",
     ):
         load_config(path)
+
+
+@settings(max_examples=100, deadline=None)
+@given(image=range_images(), threshold=st.floats(0.3, 3.0), min_size=st.integers(1, 6))
+def test_unit_weights_count_pixels(image, threshold, min_size):
+    ranges, elevation = image
+    ones = np.ones(ranges.shape, np.int32)
+    by_pixels = flic_labels(ranges, elevation, threshold, min_size)
+    np.testing.assert_array_equal(
+        flic_labels(ranges, elevation, threshold, min_size, weights=ones), by_pixels
+    )
+    np.testing.assert_array_equal(
+        bogoslavskyi_labels(ranges, elevation, 10.0, min_size, weights=ones),
+        bogoslavskyi_labels(ranges, elevation, 10.0, min_size),
+    )
+
+
+def test_pixel_point_counts_of_a_projection_and_of_a_sensor_image():
+    from flic_cli.methods import pixel_point_counts
+    from flic_cli.range_image import from_sensor_image, project_points
+
+    # three points in one pixel (same direction, 5.0 / 5.1 / 5.2 m), one alone, 64 rings faked
+    # by a spherical projection: the pixel holding three points counts 3
+    d = np.array([[1.0, 0.0, 0.0]] * 3 + [[0.0, 1.0, 0.0]])
+    pts = d * np.array([5.0, 5.1, 5.2, 7.0])[:, None]
+    img = project_points(pts, width=16, mode="spherical", rows=4, fov_up_deg=5, fov_down_deg=-5)
+    counts = pixel_point_counts(img)
+    assert counts.sum() == 4 and sorted(counts[counts > 0].tolist()) == [1, 3]
+    assert counts.reshape(-1)[img.point_pixel[0]] == 3
+    np.testing.assert_array_equal(counts > 0, img.ranges > 0)
+    ranges = np.zeros((2, 5), np.float32)
+    ranges[0, 1] = ranges[1, 4] = 3.0
+    native = from_sensor_image(ranges, np.zeros(2))
+    np.testing.assert_array_equal(pixel_point_counts(native), (ranges > 0).astype(np.int32))
+
+
+def test_min_size_counts_points_not_pixels():
+    # 60 pixels of a wall holding two points each: 120 points, kept at min_size 100
+    from flic_cli.methods import Bogoslavskyi, Flic
+    from flic_cli.range_image import RangeImage
+
+    ranges = np.zeros((2, 2048), np.float32)
+    ranges[:, 100:130] = 6.0
+    pix = np.repeat(np.flatnonzero(ranges.reshape(-1) > 0), 2)
+    img = RangeImage(ranges, np.radians([0.0, -0.4]), pix, "rings")
+    for method in (Flic(), Flic(backend="scipy"), Bogoslavskyi()):
+        labels = method.segment(img, np.zeros((pix.size, 3), np.float32), None)
+        assert labels.shape == (120,) and (labels == 1).all(), method
+    assert (Flic(min_size=121).segment(img, np.zeros((120, 3), np.float32), None) == 0).all()
+
+
+def test_drop_small_with_weights():
+    out = drop_small(np.array([5, 5, 0, 3, 3, 9]), 3, weights=np.array([1, 1, 7, 1, 1, 3]))
+    np.testing.assert_array_equal(out, [0, 0, 0, 0, 0, 1])
+
+
+def test_dbscan_backends_agree_on_a_random_cloud():
+    pytest.importorskip(
+        "dbscan", reason="the fastdbscan backend needs pip install 'flic[fastdbscan]'"
+    )
+    from flic_cli.methods.dbscan import raw_dbscan
+
+    # blobs of different density plus uniform noise; coordinates on a 1/1024 m grid shifted by
+    # 1/2048 m, so that no two points are exactly eps apart (where the backends may differ)
+    rng = np.random.default_rng(1)
+    centres = rng.uniform(-20, 20, (12, 3))
+    blobs = [rng.normal(c, rng.uniform(0.1, 0.4), (rng.integers(20, 300), 3)) for c in centres]
+    pts = np.vstack([*blobs, rng.uniform(-25, 25, (400, 3))])
+    pts = np.round(pts * 1024) / 1024 + 1 / 2048
+    ref_raw, ref_core = raw_dbscan(pts, 0.5, 5, "sklearn")
+    raw, core = raw_dbscan(pts, 0.5, 5, "fastdbscan")
+    np.testing.assert_array_equal(core, ref_core)
+    # core points: the same partition; a border point may join any cluster it touches
+    from sklearn.metrics import adjusted_rand_score
+
+    assert adjusted_rand_score(ref_raw[ref_core], raw[core]) == 1.0
+    np.testing.assert_array_equal(raw < 0, ref_raw < 0)
+    ref = dbscan_labels(pts, 0.5, 5, 50)
+    fast = dbscan_labels(pts, 0.5, 5, 50, backend="fastdbscan")
+    assert ref.max() >= 5 and adjusted_rand_score(ref, fast) > 0.99
+
+
+def test_dbscan_backend_is_validated():
+    from flic_cli.methods import Dbscan
+
+    with pytest.raises(ValueError, match="backend"):
+        Dbscan(backend="cuda")

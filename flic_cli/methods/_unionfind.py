@@ -59,6 +59,7 @@ def connect_labels(
     criterion: int,
     param: float,
     min_size: int,
+    weights: np.ndarray,
 ) -> np.ndarray:
     """Connected components of the range-image graph, small components dropped.
 
@@ -74,7 +75,9 @@ def connect_labels(
         its step-th neighbour below and to the right, wrapping around).
     criterion : DISTANCE or ANGLE.
     param : t^2 (m^2) for DISTANCE, tan(theta) for ANGLE.
-    min_size : components with fewer pixels are dropped (label 0).
+    min_size : components whose ``weights`` sum to less are dropped (label 0).
+    weights : (H, W) int32, points per pixel (see :func:`flic_cli.methods.base.pixel_point_counts`);
+        all ones = count pixels.
 
     Returns
     -------
@@ -84,6 +87,7 @@ def connect_labels(
     n = h * w
     r_flat = ranges.reshape(n)
     m_flat = mask.reshape(n)
+    w_flat = weights.reshape(n)
     # Invariant: parent[i] <= i (unions hang the larger root under the smaller), so one ascending
     # pass flattens every tree and the root of a component is its first pixel in raster order.
     parent = np.arange(n, dtype=np.int32)
@@ -177,14 +181,35 @@ def connect_labels(
                     if j != i and m_flat[j] and _linked(d1, r_flat[j], chm, shm, criterion, param):
                         _union(parent, i, j)
 
-    # Flatten (ascending order, see the invariant) and count sizes in one pass.
-    size = np.zeros(n, dtype=np.int32)
+    return number_components(parent, m_flat, w_flat, min_size).reshape(h, w)
+
+
+@njit(cache=True)
+def number_components(
+    parent: np.ndarray, m_flat: np.ndarray, w_flat: np.ndarray, min_size: int
+) -> np.ndarray:
+    """Labels from a union-find forest whose roots are their component's first member.
+
+    Parameters
+    ----------
+    parent : (N,) int32 forest with ``parent[i] <= i`` (modified: flattened).
+    m_flat : (N,) bool, the members (others get label 0).
+    w_flat : (N,) int32 weight of each member (points per pixel).
+    min_size : components whose weights sum to less are dropped.
+
+    Returns
+    -------
+    (N,) int32 labels 1..K numbered in order of each component's first member, 0 = none.
+    """
+    n = parent.size
+    # Flatten (ascending order, see the invariant) and sum the weights in one pass.
+    size = np.zeros(n, dtype=np.int64)
     for i in range(n):
         if m_flat[i]:
             root = parent[parent[i]]
             parent[i] = root
-            size[root] += 1
-    # Number the kept components in raster order of their first pixel; size[root] < 0 marks a
+            size[root] += w_flat[i]
+    # Number the kept components in order of their first member; size[root] < 0 marks a
     # numbered root (-label).
     labels = np.zeros(n, dtype=np.int32)
     k = 0
@@ -198,4 +223,4 @@ def connect_labels(
                 k += 1
                 size[root] = -k
                 labels[i] = k
-    return labels.reshape(h, w)
+    return labels

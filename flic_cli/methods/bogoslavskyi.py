@@ -10,6 +10,7 @@ from pydantic.dataclasses import dataclass
 
 from flic_cli.config.component import STRICT
 from flic_cli.methods._unionfind import ANGLE, connect_labels
+from flic_cli.methods.base import pixel_point_counts, pixel_weights
 from flic_cli.methods.flic import connection_sets
 from flic_cli.range_image import RangeImage
 
@@ -27,6 +28,7 @@ def bogoslavskyi_labels(
     angle_deg: float = 10.0,
     min_size: int = 100,
     mask: np.ndarray | None = None,
+    weights: np.ndarray | None = None,
 ) -> np.ndarray:
     """Cluster labels by the angle criterion: 4-neighbours (wrapping) join when beta > angle_deg.
 
@@ -38,8 +40,9 @@ def bogoslavskyi_labels(
     ranges : (H, W) float32, metres, 0 = none.
     elevation : (H,) radians.
     angle_deg : the threshold theta, degrees (10 in the original).
-    min_size : smallest cluster, pixels.
+    min_size : smallest cluster, points (the sum of its pixels' ``weights``).
     mask : pixels to cluster (default: valid ones).
+    weights : (H, W) int, points per pixel (default 1: the minimum size counts pixels).
 
     Returns
     -------
@@ -59,6 +62,7 @@ def bogoslavskyi_labels(
         ANGLE,
         float(np.tan(np.radians(angle_deg))),
         int(min_size),
+        pixel_weights(weights, ranges.shape),
     )
 
 
@@ -69,11 +73,11 @@ class Bogoslavskyi:
     Attributes
     ----------
     angle_deg : neighbours join when their angle beta exceeds this, degrees.
-    min_size : smallest cluster kept.
+    min_size : smallest cluster kept, points of the evaluated set (a pixel counts its points).
     """
 
     angle_deg: Annotated[float, Field(gt=0, lt=90, description="angle threshold, degrees")] = 10.0
-    min_size: Annotated[int, Field(ge=1, description="smallest cluster kept")] = 100
+    min_size: Annotated[int, Field(ge=1, description="smallest cluster kept, points")] = 100
     main_param: ClassVar[str] = "angle_deg"
 
     def segment(
@@ -81,6 +85,11 @@ class Bogoslavskyi:
     ) -> np.ndarray:
         mask = image.ranges > 0 if ground is None else (image.ranges > 0) & ~ground
         labels = bogoslavskyi_labels(
-            image.ranges, image.elevation, self.angle_deg, self.min_size, mask
+            image.ranges,
+            image.elevation,
+            self.angle_deg,
+            self.min_size,
+            mask,
+            pixel_point_counts(image),
         )
         return image.point_labels(labels)

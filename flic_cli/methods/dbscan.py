@@ -1,20 +1,73 @@
-"""DBSCAN (scikit-learn) on the 3D points of the non-ground point set."""
+"""DBSCAN on the 3D points of the non-ground point set.
+
+Two backends compute it:
+
+- ``"sklearn"`` (the reference, default): :class:`sklearn.cluster.DBSCAN`, 0.2-0.5 s per
+  SemanticKITTI frame on one core.
+- ``"fastdbscan"``: the ``dbscan`` package (Wang, Gu, Shun: "Theoretically-Efficient and Practical
+  Parallel DBSCAN", SIGMOD 2020; ``pip install 'flic[fastdbscan]'``), grid-based and parallel
+  (threads: ``PARLAY_NUM_THREADS``, read once when it first runs).
+
+Measured on the 50 shared frames, no-ground point sets, one thread each, same process
+(``python scripts/dbscan_backends.py ../shared/data/semantickitti results/dbscan-backends``): median
+198 ms (scikit-learn) against 44 ms (the package), 4.4 times faster; adjusted Rand index of the
+final labels >= 0.9936, IoU_mu 86.38 against 86.38, P_mu equal. Of 2.4 million points, 873 end in
+another cluster or in noise. Among them: 710 border points within ``eps`` of core points of two
+clusters, given to the other one (DBSCAN leaves that open), and 114 points that scikit-learn takes
+as core points but the package does not (110 of them with exactly ``min_samples`` neighbours
+within ``eps``, none closer than 7e-5 m to ``eps``; the package's answer there depends on points
+far away), which turns 78 border points into noise.
+"""
 
 from __future__ import annotations
 
-from typing import Annotated, ClassVar
+import importlib.util
+from typing import Annotated, ClassVar, Literal
 
 import numpy as np
-from pydantic import Field
+from pydantic import Field, field_validator
 from pydantic.dataclasses import dataclass
 
 from flic_cli.config.component import STRICT
 from flic_cli.methods.base import drop_small
 from flic_cli.range_image import RangeImage
 
+BACKENDS = ("sklearn", "fastdbscan")
+
+
+def raw_dbscan(
+    points: np.ndarray, eps_m: float, min_samples: int, backend: str = "sklearn"
+) -> tuple[np.ndarray, np.ndarray]:
+    """DBSCAN labels as the backend returns them (-1 = noise, 0..K-1) and the core-point mask.
+
+    Parameters
+    ----------
+    points : (N, 3+) metres (only the first three columns are used).
+    eps_m, min_samples : as :func:`dbscan_labels`.
+    backend : ``"sklearn"`` or ``"fastdbscan"`` (module docstring).
+    """
+    xyz = np.ascontiguousarray(points[:, :3], dtype=np.float64)
+    if backend == "sklearn":
+        from sklearn.cluster import DBSCAN
+
+        est = DBSCAN(eps=eps_m, min_samples=min_samples, n_jobs=1).fit(xyz)
+        core = np.zeros(xyz.shape[0], dtype=bool)
+        core[est.core_sample_indices_] = True
+        return est.labels_.astype(np.int64), core
+    if backend == "fastdbscan":
+        from dbscan import DBSCAN as fast_dbscan
+
+        labels, core = fast_dbscan(xyz, eps=float(eps_m), min_samples=int(min_samples))
+        return np.asarray(labels, dtype=np.int64), np.asarray(core, dtype=bool)
+    raise ValueError(f"unknown DBSCAN backend {backend!r} ({' | '.join(BACKENDS)})")
+
 
 def dbscan_labels(
-    points: np.ndarray, eps_m: float = 0.5, min_samples: int = 5, min_size: int = 100
+    points: np.ndarray,
+    eps_m: float = 0.5,
+    min_samples: int = 5,
+    min_size: int = 100,
+    backend: str = "sklearn",
 ) -> np.ndarray:
     """DBSCAN cluster labels of 3D points.
 
@@ -24,16 +77,15 @@ def dbscan_labels(
     eps_m : neighbourhood radius, metres.
     min_samples : points (the point itself included) in the radius that make a core point.
     min_size : clusters with fewer points are dropped, as for the image methods.
+    backend : ``"sklearn"`` (reference) or ``"fastdbscan"`` (module docstring).
 
     Returns
     -------
-    (N,) int32, 0 = noise or dropped, 1..K clusters.
+    (N,) int32, 0 = noise or dropped, 1..K clusters in order of first point.
     """
-    from sklearn.cluster import DBSCAN
-
     if points.shape[0] == 0:
         return np.zeros(0, dtype=np.int32)
-    raw = DBSCAN(eps=eps_m, min_samples=min_samples, n_jobs=1).fit_predict(points[:, :3])
+    raw, _ = raw_dbscan(points, eps_m, min_samples, backend)
     return drop_small(raw + 1, min_size)
 
 
@@ -46,12 +98,24 @@ class Dbscan:
     eps_m : neighbourhood radius, metres.
     min_samples : points in the radius (the point itself included) that make a core point.
     min_size : smallest cluster kept, points.
+    backend : ``"sklearn"`` (the reference) or ``"fastdbscan"`` (the ``dbscan`` package: the same
+        clusters up to a few border points, about four times faster on one core; module doc).
     """
 
     eps_m: Annotated[float, Field(gt=0, description="neighbourhood radius, metres")] = 0.5
     min_samples: Annotated[int, Field(ge=1, description="points that make a core point")] = 5
     min_size: Annotated[int, Field(ge=1, description="smallest cluster kept, points")] = 100
+    backend: Literal["sklearn", "fastdbscan"] = "sklearn"
     main_param: ClassVar[str] = "eps_m"
+
+    @field_validator("backend")
+    @classmethod
+    def _check_backend(cls, backend: str) -> str:
+        if backend == "fastdbscan" and importlib.util.find_spec("dbscan") is None:
+            raise ValueError(
+                "backend 'fastdbscan' needs the package dbscan: pip install 'flic[fastdbscan]'"
+            )
+        return backend
 
     def segment(
         self, image: RangeImage, points: np.ndarray, ground: np.ndarray | None
@@ -60,5 +124,7 @@ class Dbscan:
         if ground is not None:
             keep &= ~ground.reshape(-1)[np.maximum(image.point_pixel, 0)]
         out = np.zeros(points.shape[0], dtype=np.int32)
-        out[keep] = dbscan_labels(points[keep], self.eps_m, self.min_samples, self.min_size)
+        out[keep] = dbscan_labels(
+            points[keep], self.eps_m, self.min_samples, self.min_size, self.backend
+        )
         return out

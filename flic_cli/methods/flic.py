@@ -10,6 +10,7 @@ from pydantic.dataclasses import dataclass
 
 from flic_cli.config.component import STRICT
 from flic_cli.methods._unionfind import DISTANCE, connect_labels
+from flic_cli.methods.base import pixel_point_counts, pixel_weights
 from flic_cli.range_image import RangeImage
 
 MC_MODES = ("map", "neighbour")
@@ -68,6 +69,7 @@ def flic_labels_scipy(
     maps: tuple = (),
     mc_mode: str = "map",
     mask: np.ndarray | None = None,
+    weights: np.ndarray | None = None,
 ) -> np.ndarray:
     """FLIC the way the paper implements it, with scipy: same result as :func:`flic_labels`.
 
@@ -136,7 +138,7 @@ def flic_labels_scipy(
     graph = coo_matrix((np.ones(a.size), (a, b)), shape=(n + 1, n + 1))
     _, merged = connected_components(graph, directed=False)
     labels = np.where(flat > 0, merged[flat] + 1, 0)
-    return drop_small(labels, min_size).reshape(h, w)
+    return drop_small(labels, min_size, weights).reshape(h, w)
 
 
 def flic_labels(
@@ -147,6 +149,7 @@ def flic_labels(
     maps: tuple = (),
     mc_mode: str = "map",
     mask: np.ndarray | None = None,
+    weights: np.ndarray | None = None,
 ) -> np.ndarray:
     """FLIC cluster labels of a range image.
 
@@ -154,17 +157,20 @@ def flic_labels(
     ``d1^2 + d2^2 - 2 cos(alpha) d1 d2 < threshold_m^2`` (the law of cosines: their 3D distance is
     below the threshold). Direct connections are the 4-neighbours with horizontal wrap-around; each
     Map Connection adds the connections of its step (see :func:`connection_sets`). Clusters are the
-    connected components; those with fewer than ``min_size`` measurements are dropped.
+    connected components; those with fewer than ``min_size`` points are dropped (the points of a
+    pixel: ``weights``).
 
     Parameters
     ----------
     ranges : (H, W) float32 ranges, metres, 0 = no measurement.
     elevation : (H,) row elevations, radians.
     threshold_m : distance threshold t, metres.
-    min_size : smallest cluster, in measurements (pixels).
+    min_size : smallest cluster, in points (the sum of its pixels' ``weights``).
     maps : Map Connection steps, see :func:`connection_sets`.
     mc_mode : ``"map"`` or ``"neighbour"``.
     mask : (H, W) bool, pixels to cluster (default: all valid pixels).
+    weights : (H, W) int, points per pixel (:func:`flic_cli.methods.base.pixel_point_counts`);
+        default 1 per pixel (the minimum size then counts pixels).
 
     Returns
     -------
@@ -184,6 +190,7 @@ def flic_labels(
         DISTANCE,
         float(threshold_m) ** 2,
         int(min_size),
+        pixel_weights(weights, ranges.shape),
     )
 
 
@@ -197,7 +204,7 @@ class Flic:
     Attributes
     ----------
     threshold_m : distance threshold t, metres.
-    min_size : smallest cluster kept.
+    min_size : smallest cluster kept, points of the evaluated set (a pixel counts its points).
     maps : Map Connections, ``[row_step, col_step]`` or ``[row_step, col_step, row_offset,
         col_offset]`` each (see :func:`connection_sets`).
     mc_mode : ``"map"`` (an MC is the sub-image of every step-th row and column) or
@@ -207,7 +214,7 @@ class Flic:
     """
 
     threshold_m: Annotated[float, Field(gt=0, description="distance threshold t, metres")] = 0.8
-    min_size: Annotated[int, Field(ge=1, description="smallest cluster kept")] = 100
+    min_size: Annotated[int, Field(ge=1, description="smallest cluster kept, points")] = 100
     maps: tuple[tuple[PositiveInt, ...], ...] = ()
     mc_mode: Literal["map", "neighbour"] = "map"
     backend: Literal["numba", "scipy"] = "numba"
@@ -236,5 +243,6 @@ class Flic:
             self.maps,
             self.mc_mode,
             mask,
+            pixel_point_counts(image),
         )
         return image.point_labels(labels)

@@ -30,6 +30,7 @@ THREAD_ENV_VARS = (
     "BLIS_NUM_THREADS",
     "VECLIB_MAXIMUM_THREADS",
     "NUMEXPR_NUM_THREADS",
+    "PARLAY_NUM_THREADS",  # the `dbscan` package (DBSCAN backend "fastdbscan")
 )
 
 #: Distributions whose versions go into the record (import name -> distribution name).

@@ -32,6 +32,7 @@ DEFAULT_RANGES: dict[str, tuple[float, float, float]] = {
     "flic": (0.2, 1.5, 0.05),
     "bogoslavskyi": (2.0, 30.0, 1.0),
     "dbscan": (0.2, 1.5, 0.1),
+    "bridge": (0.2, 1.0, 0.05),
 }
 
 #: Axis labels of the main parameters.

@@ -1,0 +1,248 @@
+"""Bridge against the graph its docstring defines, built by brute force from 3D coordinates."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import assume, given, settings
+from hypothesis import strategies as st
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import connected_components
+
+from flic_cli.methods import Bridge, bridge_labels, flic_labels
+from flic_cli.range_image import RangeImage
+
+LEFT, UP = (0, -1), (-1, 0)
+DIAGONALS = ((-1, -1), (-1, 1))
+
+
+def xyz_of(ranges: np.ndarray, elevation: np.ndarray) -> np.ndarray:
+    """(H, W, 3) float64 points from the angles of the image convention (no law of cosines)."""
+    h, w = ranges.shape
+    img = RangeImage(ranges.astype(np.float32), elevation, np.zeros(0, np.int64), "native")
+    el = img.elevation[:, None]
+    az = img.azimuth[None, :]
+    r = ranges.astype(np.float64)
+    return np.stack(
+        [r * np.cos(el) * np.cos(az), r * np.cos(el) * np.sin(az), r * np.sin(el) + 0 * az], -1
+    )
+
+
+def bridge_graph(ranges, elevation, mask, threshold, gamma_deg, reach):
+    """Edges of the Bridge graph, walked exactly as the module docstring says.
+
+    Returns the edges and, for every distance test made, ``distance - t_p`` (to stay away from
+    ties between float32 ranges and float64 coordinates).
+    """
+    h, w = ranges.shape
+    pts = xyz_of(ranges, elevation)
+    node = mask & (ranges > 0)
+    edges, margins = [], []
+    for r in range(h):
+        for c in range(w):
+            if not node[r, c]:
+                continue
+            d = ranges[r, c]
+            tp = max(threshold, float(d) * np.sin(np.radians(gamma_deg)))
+            ends = {}
+            for dr, dc in (LEFT, UP, *DIAGONALS):
+                if (dr, dc) in DIAGONALS and ends.get(LEFT) == 1 and ends.get(UP) == 1:
+                    break  # inside a surface: no diagonal walks
+                k_max = min(reach, r if dr else reach, w - 1 if dc else reach)
+                for k in range(1, k_max + 1):
+                    rq, cq = r + k * dr, (c + k * dc) % w
+                    if not node[rq, cq]:
+                        if ranges[rq, cq] > d:
+                            break  # a range beyond p outside the mask: free space
+                        continue  # a hole
+                    dist = float(np.linalg.norm(pts[r, c] - pts[rq, cq]))
+                    margins.append(dist - tp)
+                    if dist < tp:
+                        edges.append((r * w + c, rq * w + cq))
+                        ends[(dr, dc)] = k
+                        break
+                    if ranges[rq, cq] > d:
+                        break  # free space beside p
+    return edges, margins
+
+
+def components(shape, node, edges, weights, min_size):
+    """Connected components, dropped under ``min_size`` summed weights, numbered in raster order."""
+    n = shape[0] * shape[1]
+    a = [e[0] for e in edges]
+    b = [e[1] for e in edges]
+    _, comp = connected_components(coo_matrix((np.ones(len(a)), (a, b)), shape=(n, n)), False)
+    flat_node = node.reshape(-1)
+    size = np.bincount(comp[flat_node], weights=weights.reshape(-1)[flat_node], minlength=n)
+    out = np.zeros(n, np.int32)
+    numbers: dict[int, int] = {}
+    for i in np.flatnonzero(flat_node):
+        if size[comp[i]] >= min_size:
+            out[i] = numbers.setdefault(int(comp[i]), len(numbers) + 1)
+    return out.reshape(shape)
+
+
+@st.composite
+def scenes(draw):
+    """Small range images with surfaces, jumps, holes, near occluders and a mask."""
+    h = draw(st.integers(1, 8))
+    w = draw(st.integers(1, 20))
+    rng = np.random.default_rng(draw(st.integers(0, 2**32 - 1)))
+    # a few flat-ish surfaces at different depths, side by side
+    cuts = np.sort(rng.integers(0, w + 1, rng.integers(0, 4)))
+    depth = rng.uniform(2.0, 25.0, cuts.size + 1)
+    ranges = depth[np.searchsorted(cuts, np.arange(w), side="right")][None, :].repeat(h, 0)
+    ranges = ranges * (1.0 + rng.normal(0.0, draw(st.sampled_from([0.0, 0.01, 0.05])), (h, w)))
+    occluder = rng.random((h, w)) < draw(st.sampled_from([0.0, 0.15, 0.3]))
+    ranges[occluder] *= rng.uniform(0.2, 0.9, occluder.sum())
+    ranges[rng.random((h, w)) < draw(st.sampled_from([0.0, 0.3, 0.5]))] = 0.0
+    elevation = np.sort(rng.uniform(-0.45, 0.05, h))[::-1].copy()
+    mask = rng.random((h, w)) >= draw(st.sampled_from([0.0, 0.2]))
+    weights = rng.integers(0, 5, (h, w)).astype(np.int32)
+    return ranges.astype(np.float32), elevation, mask, weights
+
+
+@settings(max_examples=400, deadline=None)
+@given(
+    scene=scenes(),
+    threshold=st.floats(0.2, 3.0),
+    gamma=st.sampled_from([0.0, 1.0, 2.0, 5.0]),
+    reach=st.integers(1, 20),
+    min_size=st.integers(1, 10),
+)
+def test_bridge_equals_components_of_its_graph(scene, threshold, gamma, reach, min_size):
+    ranges, elevation, mask, weights = scene
+    edges, margins = bridge_graph(ranges, elevation, mask, threshold, gamma, reach)
+    assume(all(abs(m) > 1e-4 for m in margins))
+    node = mask & (ranges > 0)
+    expected = components(ranges.shape, node, edges, weights, min_size)
+    got = bridge_labels(ranges, elevation, threshold, gamma, reach, min_size, mask, weights)
+    np.testing.assert_array_equal(got, expected)
+
+
+@settings(max_examples=200, deadline=None)
+@given(scene=scenes(), threshold=st.floats(0.2, 3.0))
+def test_reach_one_refines_nothing_of_flic(scene, threshold):
+    # With reach 1 and a fixed threshold every FLIC (0 MC) edge is a Bridge edge: each FLIC
+    # cluster lies inside one Bridge cluster.
+    ranges, elevation, mask, _ = scene
+    fl = flic_labels(ranges, elevation, threshold, 1, mask=mask & (ranges > 0))
+    br = bridge_labels(ranges, elevation, threshold, 0.0, 1, 1, mask)
+    for k in range(1, fl.max() + 1):
+        assert np.unique(br[fl == k]).size == 1
+
+
+WIDTH = 2048
+ELEVATION = np.radians(np.linspace(2.0, -24.9, 64))
+
+
+def wall(d_m: float, cols: slice, rows: slice = slice(20, 40)) -> np.ndarray:
+    ranges = np.zeros((64, WIDTH), np.float32)
+    ranges[rows, cols] = d_m
+    return ranges
+
+
+def test_bridges_a_hole_and_reaches_past_a_pole():
+    ranges = wall(10.0, slice(100, 160))
+    ranges[25:35, 120:124] = 0.0  # missing returns (dark paint)
+    ranges[:, 140:143] = np.where(ranges[:, 140:143] > 0, 6.0, 0.0)  # a pole 4 m in front
+    labels = bridge_labels(ranges, ELEVATION, min_size=1)
+    wall_ids = np.unique(labels[(ranges == 10.0)])
+    assert wall_ids.size == 1 and wall_ids[0] > 0  # one wall, holes and pole bridged
+    assert np.unique(labels[ranges == 6.0]).size == 1
+    assert labels[ranges == 6.0][0] != wall_ids[0]  # the pole is its own cluster
+    # FLIC 0 MC cuts the wall at the pole
+    assert np.unique(flic_labels(ranges, ELEVATION, 0.8, 1)[ranges == 10.0]).size == 2
+
+
+def test_free_space_between_two_surfaces_is_not_jumped():
+    # two boards 0.3 m apart at 8 m (about 12 columns at 2048): with a wall seen between them
+    # they stay apart; with nothing seen between them (sky) the walk reaches over the gap
+    step = 2 * np.pi / WIDTH
+    gap_cols = int(round(0.3 / 8.0 / step))
+    ranges = wall(8.0, slice(100, 140))
+    ranges[20:40, 140 + gap_cols : 180] = 8.0
+    behind = ranges.copy()
+    behind[20:40, 140 : 140 + gap_cols] = 30.0
+    apart = bridge_labels(behind, ELEVATION, 0.4, 2.0, 16, 1)
+    assert apart[30, 120] != apart[30, 160]
+    joined = bridge_labels(ranges, ELEVATION, 0.4, 2.0, 16, 1)
+    assert joined[30, 120] == joined[30, 160]
+
+
+def test_ground_pixels_show_free_space_but_are_not_nodes():
+    ranges = wall(8.0, slice(100, 140))
+    ranges[20:40, 150:180] = 8.0
+    ranges[20:40, 140:150] = 9.0  # ground beyond the boards, visible between them
+    mask = ranges != 9.0
+    labels = bridge_labels(ranges, ELEVATION, 1.5, 0.0, 16, 1, mask)
+    assert labels[30, 120] != labels[30, 160] and (labels[ranges == 9.0] == 0).all()
+    # the same gap as a hole (nothing there) is bridged
+    ranges[ranges == 9.0] = 0.0
+    labels = bridge_labels(ranges, ELEVATION, 1.5, 0.0, 16, 1)
+    assert labels[30, 120] == labels[30, 160]
+
+
+def test_bridge_component_counts_points_and_maps_to_points():
+    ranges = wall(6.0, slice(100, 130), slice(30, 32))  # 60 pixels
+    pix = np.repeat(np.flatnonzero(ranges.reshape(-1) > 0), 2)  # two points per pixel
+    img = RangeImage(ranges, ELEVATION, pix, "rings")
+    pts = np.zeros((pix.size, 3), np.float32)
+    assert (Bridge().segment(img, pts, None) == 1).all()
+    assert (Bridge(min_size=121).segment(img, pts, None) == 0).all()
+    ground = np.zeros(ranges.shape, bool)
+    ground[31] = True
+    assert (Bridge(min_size=60).segment(img, pts, ground) > 0).sum() == 60
+
+
+def test_bridge_is_a_configurable_method(tmp_path):
+    from flic_cli.config import load_config
+    from flic_cli.errors import FlicInputError
+    from flic_cli.methods import KINDS
+
+    assert KINDS["bridge"] is Bridge
+    assert load_config().method("bridge").method == Bridge()
+    path = tmp_path / "mine.toml"
+    path.write_text('[methods.mine]\nkind = "bridge"\nthreshold_m = 0.5\nreach_px = 4\n')
+    assert load_config(path).method("mine").method == Bridge(threshold_m=0.5, reach_px=4)
+    path.write_text('[methods.bad]\nkind = "bridge"\nreach_px = 0\n')
+    with pytest.raises(FlicInputError, match=r"mine.toml: \[methods.bad\] reach_px"):
+        load_config(path)
+
+
+def _person(x: float, y: float, instance: int):
+    from flic_cli.sample import SENSOR_HEIGHT_M, Box
+
+    # 0.5 m wide, 0.35 m deep, 1.75 m tall, standing on the road
+    return Box((x, y, -SENSOR_HEIGHT_M + 0.875), (0.175, 0.25, 0.875), 0.0, 30, instance)
+
+
+# Beyond about 14 m the link distance d sin(2 deg) exceeds the 0.5 m gap and, where only holes
+# (removed ground, sky) lie between them, two such people join (DBSCAN with eps 0.5 m is no
+# different); the sample's sidewalks lie 5-12 m from the sensor.
+@pytest.mark.parametrize("distance_m", [6.0, 9.0, 12.0])
+@pytest.mark.parametrize("behind", ["nothing", "facade"])
+def test_two_people_one_metre_apart_stay_two_clusters(distance_m, behind):
+    # Two people side by side, centres 1 m apart (a 0.5 m gap), in front of the sensor, cast
+    # with the sample's HDL-64E model; ground points removed as in the "No Ground" setting.
+    from flic_cli.classes import GROUND_CLASSES
+    from flic_cli.sample import HDL64_PITCH_DEG, Box, Ground, Scene, cast
+
+    boxes = [_person(distance_m, -0.5, 1), _person(distance_m, 0.5, 2)]
+    if behind == "facade":
+        boxes.append(Box((distance_m + 8.0, 0.0, 2.0), (0.2, 10.0, 5.0), 0.0, 50))
+    scene = Scene(0, 0, np.eye(3, 4), Ground(0.0, (-4.0, 4.0), (-8.0, 8.0)), boxes, [])
+    elevation = -np.radians(HDL64_PITCH_DEG)
+    img0 = RangeImage(np.zeros((64, WIDTH), np.float32), elevation, np.zeros(0, np.int64), "x")
+    ranges, semantic, instance = cast(
+        scene, HDL64_PITCH_DEG, img0.azimuth, np.random.default_rng(0)
+    )
+    ranges[np.isin(semantic, list(GROUND_CLASSES))] = 0.0  # the "No Ground" setting
+    labels = bridge_labels(ranges.astype(np.float32), elevation, min_size=30)
+    a = labels[instance == 1]
+    b = labels[instance == 2]
+    assert a.size > 100 and b.size > 100
+    la = np.bincount(a).argmax()
+    lb = np.bincount(b).argmax()
+    assert la > 0 and lb > 0 and la != lb
+    assert (a == la).mean() > 0.95 and (b == lb).mean() > 0.95
