@@ -101,6 +101,22 @@ class RangeImage:
         )
         return xyz.reshape(-1, 3).astype(np.float32)
 
+    def pixel_points(self, pixels: np.ndarray | None = None) -> np.ndarray:
+        """(M, 3) float32 Cartesian points of some pixels, equal to ``to_points()[pixels]``.
+
+        Parameters
+        ----------
+        pixels : (M,) flat pixel indices; default ``point_pixel`` (for a sensor image: the scan's
+            points, one per valid pixel).
+        """
+        pix = self.point_pixel if pixels is None else np.asarray(pixels, dtype=np.int64)
+        el = self.elevation
+        az = self.azimuth
+        return _pixel_points(
+            self.ranges.reshape(-1), pix, self.ranges.shape[1],
+            np.cos(el), np.sin(el), np.cos(az), np.sin(az),
+        )  # fmt: skip
+
     def point_labels(self, pixel_labels: np.ndarray) -> np.ndarray:
         """Per-point labels from per-pixel labels: every point takes its pixel's label.
 
@@ -119,6 +135,30 @@ class RangeImage:
         has = self.point_pixel >= 0
         out[has] = flat[self.point_pixel[has]]
         return out
+
+
+@njit(cache=True)
+def _pixel_points(
+    ranges: np.ndarray,
+    pix: np.ndarray,
+    width: int,
+    cos_el: np.ndarray,
+    sin_el: np.ndarray,
+    cos_az: np.ndarray,
+    sin_az: np.ndarray,
+) -> np.ndarray:
+    """Points of the pixels ``pix`` of a flat range image, computed as :meth:`RangeImage.to_points`
+    does (float64, the same products in the same order, then float32)."""
+    out = np.empty((pix.size, 3), dtype=np.float32)
+    for j in range(pix.size):
+        p = pix[j]
+        row = p // width
+        col = p - row * width
+        r = np.float64(ranges[p])
+        out[j, 0] = np.float32(r * cos_el[row] * cos_az[col])
+        out[j, 1] = np.float32(r * cos_el[row] * sin_az[col])
+        out[j, 2] = np.float32(r * sin_el[row])
+    return out
 
 
 # ---------------------------------------------------------------------------------------------
@@ -160,55 +200,49 @@ def _spiral_offset(az: np.ndarray) -> float:
 
 
 @njit(cache=True)
-def _rings_kernel(az: np.ndarray, expected_rows: int) -> tuple[np.ndarray, np.ndarray, bool]:
-    """Ring index of every point from its azimuth in scan order (see :func:`recover_rings`).
+def _ring_starts(az: np.ndarray, expected_rows: int) -> tuple[np.ndarray, bool]:
+    """Where every ring starts, from the azimuths in scan order (see :func:`recover_rings`).
 
     Returns
     -------
-    ring : (N,) int64 ring index (complete only when ``ok``)
     starts : (expected_rows + 1,) int64, ``starts[r]`` = index of the first point of ring ``r``
-        or later (rings are consecutive), ``starts[-1] = N``
-    ok : False when the ring index reached ``expected_rows``
+        or later (the ring index never decreases along the scan), ``starts[-1] = N``
+    ok : False when the ring index reached ``expected_rows`` (``starts`` is then incomplete)
     """
     n = az.size
-    ring = np.empty(n, dtype=np.int64)
     starts = np.zeros(expected_rows + 1, dtype=np.int64)
     offset = _spiral_offset(az)
     cum = 0.0
     top = first = np.int64(np.floor((az[0] - offset) / _TWO_PI))
     current = 0
-    for i in range(n):
-        if i > 0:
-            cum = _unwrap_step(az[i], az[i - 1], cum)
-            k = np.int64(np.floor((az[i] + cum - offset) / _TWO_PI))
-            if k > top:
-                top = k
-        r = top - first
-        if r != current:
+    for i in range(1, n):
+        cum = _unwrap_step(az[i], az[i - 1], cum)
+        k = np.int64(np.floor((az[i] + cum - offset) / _TWO_PI))
+        if k > top:
+            top = k
+            r = top - first
             if r >= expected_rows:
-                return ring, starts, False
+                return starts, False
             for q in range(current + 1, r + 1):
                 starts[q] = i
             current = r
-        ring[i] = r
     for q in range(current + 1, expected_rows + 1):
         starts[q] = n
-    return ring, starts, True
+    return starts, True
 
 
-def _rings_or_none(
-    az: np.ndarray, expected_rows: int, min_ring_points: int
-) -> tuple[np.ndarray, np.ndarray] | None:
-    """``(ring, points per ring)``, or None when the scan is not ``expected_rows`` full rings."""
+def _ring_counts(az: np.ndarray, expected_rows: int, min_ring_points: int) -> np.ndarray | None:
+    """Points per ring (rings are consecutive in scan order), or None when the scan is not
+    ``expected_rows`` rings of at least ``min_ring_points`` points."""
     if az.size == 0:
         return None
-    ring, starts, ok = _rings_kernel(az, expected_rows)
+    starts, ok = _ring_starts(az, expected_rows)
     if not ok:
         return None
     counts = np.diff(starts)
     if counts[-1] == 0 or counts.min() < min_ring_points:
         return None
-    return ring, counts
+    return counts
 
 
 def recover_rings(
@@ -241,76 +275,89 @@ def recover_rings(
     """
     if azimuth is None:
         azimuth = np.arctan2(points[:, 1], points[:, 0], dtype=np.float64)
-    found = _rings_or_none(
-        np.ascontiguousarray(azimuth, dtype=np.float64), expected_rows, min_ring_points
-    )
-    return None if found is None else found[0]
+    az = np.ascontiguousarray(azimuth, dtype=np.float64)
+    counts = _ring_counts(az, expected_rows, min_ring_points)
+    return None if counts is None else np.repeat(np.arange(expected_rows), counts)
+
+
+@njit(cache=True)
+def _range(flat: np.ndarray, i: int) -> float:
+    """Range of point ``i`` of ``(3N,)`` xyz in metres, float64.
+
+    Summed as numpy's SIMD ``einsum("ij,ij->i")`` (AVX2 / AVX-512) did before,
+    ``sqrt((x^2 + z^2) + y^2)``, so that the values are bit-identical to the earlier numpy code.
+    """
+    x = np.float64(flat[3 * i])
+    y = np.float64(flat[3 * i + 1])
+    z = np.float64(flat[3 * i + 2])
+    return np.sqrt((x * x + z * z) + y * y)
 
 
 @njit(cache=True)
 def _point_geometry(
     flat: np.ndarray, n: int
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Per-point x, y (float64), range (float32) and sine of the elevation from ``(3N,)`` xyz.
+    """x, y (float64), range (float32) and sine of the elevation of every point of ``(3N,)`` xyz.
 
-    The range is summed as numpy's SIMD ``einsum("ij,ij->i")`` (AVX2 / AVX-512) did before,
-    ``sqrt((x^2 + z^2) + y^2)``, and the sine as ``clip(z / max(range, 1e-9), -1, 1)``, so the
-    values are bit-identical to the earlier numpy code. (A flat array, not an (N, 3) one, lets
-    LLVM vectorise the loop.)
+    The sine is ``clip(z / max(range, 1e-9), -1, 1)`` as before. (A flat array, not an (N, 3)
+    one, lets LLVM vectorise the loop.)
     """
     x64 = np.empty(n, dtype=np.float64)
     y64 = np.empty(n, dtype=np.float64)
     rng = np.empty(n, dtype=np.float32)
     sin_elev = np.empty(n, dtype=np.float64)
     for i in range(n):
-        x = np.float64(flat[3 * i])
-        y = np.float64(flat[3 * i + 1])
-        z = np.float64(flat[3 * i + 2])
-        x64[i] = x
-        y64[i] = y
-        r = np.sqrt((x * x + z * z) + y * y)
-        v = z / (r if r > 1e-9 else 1e-9)
+        x64[i] = np.float64(flat[3 * i])
+        y64[i] = np.float64(flat[3 * i + 1])
+        r = _range(flat, i)
+        rng[i] = np.float32(r)
+        v = np.float64(flat[3 * i + 2]) / (r if r > 1e-9 else 1e-9)
         v = v if v > -1.0 else -1.0
         sin_elev[i] = v if v < 1.0 else 1.0
-        rng[i] = np.float32(r)
     return x64, y64, rng, sin_elev
 
 
 @njit(cache=True)
-def _pixel_kernel(
-    az: np.ndarray,
-    row: np.ndarray,
+def _ring_pixels(
     rng: np.ndarray,
+    az: np.ndarray,
+    ring_counts: np.ndarray,
     keep: np.ndarray,
     use_keep: bool,
-    rows: int,
     width: int,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Nearest-point range image, points per pixel and pixel of every kept point.
+    """Nearest-point range image, points per pixel and pixel of every kept point (``rng``: the
+    points' ranges in metres).
 
-    Column ``floor((pi - az) / (2 pi) * width) mod width``; pixel ``row * width + column``.
+    The rows are the rings (consecutive in scan order, ``ring_counts`` points each); the column
+    is ``floor((pi - az) / (2 pi) * width) mod width``, the pixel ``row * width + column``.
     """
     n = az.size
-    n_pix = rows * width
+    rows = ring_counts.size
     pix = np.empty(n, dtype=np.int64)
-    for i in range(n):  # vectorised
+    for i in range(n):  # columns (vectorised)
         c = np.int64(np.floor((np.pi - az[i]) / _TWO_PI * width))
         if c >= width or c < 0:
             c %= width
-        pix[i] = row[i] * width + c
-    ranges = np.zeros(n_pix, dtype=np.float32)
-    counts = np.zeros(n_pix, dtype=np.int32)
+        pix[i] = c
+    ranges = np.zeros(rows * width, dtype=np.float32)
+    counts = np.zeros(rows * width, dtype=np.int32)
     j = 0
-    for i in range(n):
-        if use_keep and not keep[i]:
-            continue
-        p = pix[i]
-        r = rng[i]
-        if ranges[p] == 0.0 or r < ranges[p]:
-            ranges[p] = r
-        counts[p] += 1
-        pix[j] = p
-        j += 1
+    start = 0
+    for row in range(rows):
+        base = row * width
+        stop = start + ring_counts[row]
+        for i in range(start, stop):
+            if use_keep and not keep[i]:
+                continue
+            p = base + pix[i]
+            r = rng[i]
+            if ranges[p] == 0.0 or r < ranges[p]:
+                ranges[p] = r
+            counts[p] += 1
+            pix[j] = p
+            j += 1
+        start = stop
     return ranges, counts, pix[:j]
 
 
@@ -427,15 +474,15 @@ def project_points(
             raise ValueError(
                 f"keep must be a ({xyz.shape[0]},) bool mask, got {keep.dtype} {keep.shape}"
             )
-    n = xyz.shape[0]
-    x64, y64, rng, sin_elev = _point_geometry(xyz.reshape(-1), n)
-    az = np.arctan2(y64, x64)
-    found = _rings_or_none(az, rows, min_ring_points) if mode == "rings" else None
-    if found is not None:
-        ring, ring_counts = found
+    flat = xyz.reshape(-1)
+    x64, y64, rng, sin_elev = _point_geometry(flat, xyz.shape[0])
+    az = np.arctan2(y64, x64, out=x64)
+    del y64
+    ring_counts = _ring_counts(az, rows, min_ring_points) if mode == "rings" else None
+    if ring_counts is not None:
         use_keep = keep is not None
-        ranges, counts, pix = _pixel_kernel(
-            az, ring, rng, keep if use_keep else np.ones(1, dtype=bool), use_keep, rows, width
+        ranges, counts, pix = _ring_pixels(
+            rng, az, ring_counts, keep if use_keep else np.ones(1, dtype=bool), use_keep, width
         )
         # median elevation of every ring (rings are consecutive in scan order)
         elev_pts = np.arcsin(sin_elev, out=sin_elev)
@@ -449,18 +496,16 @@ def project_points(
             "using a spherical projection for this scan",
             stacklevel=2,
         )
-    return _project_spherical(xyz, az, width, rows, fov_up_deg, fov_down_deg, keep)
+    elev = np.arcsin(sin_elev, out=sin_elev)
+    return _project_spherical(xyz, az, elev, width, rows, fov_up_deg, fov_down_deg, keep)
 
 
 @njit(cache=True)
-def _ranges_kernel(xyz: np.ndarray) -> np.ndarray:
-    """(N,) float64 range of every point, summed as in :func:`_point_geometry`."""
-    out = np.empty(xyz.shape[0], dtype=np.float64)
-    for i in range(xyz.shape[0]):
-        x = np.float64(xyz[i, 0])
-        y = np.float64(xyz[i, 1])
-        z = np.float64(xyz[i, 2])
-        out[i] = np.sqrt((x * x + z * z) + y * y)
+def _ranges_kernel(flat: np.ndarray, n: int) -> np.ndarray:
+    """(N,) float64 range of every point of ``(3N,)`` xyz (see :func:`_range`)."""
+    out = np.empty(n, dtype=np.float64)
+    for i in range(n):
+        out[i] = _range(flat, i)
     return out
 
 
@@ -482,18 +527,17 @@ def _nearest_per_pixel(
 def _project_spherical(
     xyz: np.ndarray,
     az: np.ndarray,
+    elev: np.ndarray,
     width: int,
     rows: int,
     fov_up_deg: float,
     fov_down_deg: float,
     keep: np.ndarray | None,
 ) -> RangeImage:
-    """Spherical projection: rows bin the elevation uniformly over the vertical field of view."""
-    rng = _ranges_kernel(xyz)
+    """Spherical projection: rows bin the elevation (radians, per point) uniformly over the
+    vertical field of view."""
+    rng = _ranges_kernel(xyz.reshape(-1), xyz.shape[0])
     cols = np.floor((np.pi - az) / (2.0 * np.pi) * width).astype(np.int64) % width
-    with np.errstate(invalid="ignore", divide="ignore"):
-        z = xyz[:, 2].astype(np.float64)
-        elev = np.arcsin(np.clip(z / np.maximum(rng, 1e-9), -1.0, 1.0))
     if keep is not None:
         rng, elev, cols = rng[keep], elev[keep], cols[keep]
     up, down = np.radians(fov_up_deg), np.radians(fov_down_deg)
