@@ -191,6 +191,22 @@ def _pair_keys(obj: np.ndarray, cluster: np.ndarray, n_ids: int) -> np.ndarray:
 
 
 @njit(cache=True)
+def _centroid_sums(
+    points: np.ndarray, index: np.ndarray, obj: np.ndarray, n_obj: int
+) -> np.ndarray:
+    """(n_obj, 3) float64 sums of x, y, z over every object's points, added in point order
+    (as ``np.bincount(obj, weights=...)`` adds them)."""
+    sums = np.zeros((n_obj, 3), dtype=np.float64)
+    for t in range(index.size):
+        o = obj[t]
+        if o >= 0:
+            i = index[t]
+            for k in range(3):
+                sums[o, k] += np.float64(points[i, k])
+    return sums
+
+
+@njit(cache=True)
 def _match(
     pair_obj: np.ndarray,
     pair_cluster: np.ndarray,
@@ -325,13 +341,7 @@ def score_frame(
 
     distance = np.full(n_obj, np.nan, dtype=np.float64)
     if points is not None and n_obj:
-        sel = thing_obj >= 0
-        obj_pts = pts[thing_index[sel], :3].astype(np.float64, copy=False)
-        idx = thing_obj[sel]
-        sums = np.stack(
-            [np.bincount(idx, weights=obj_pts[:, k], minlength=n_obj) for k in range(3)], axis=1
-        )
-        centroid = sums / obj_sizes[:, None]
+        centroid = _centroid_sums(pts, thing_index, thing_obj, n_obj) / obj_sizes[:, None]
         distance = np.sqrt(np.einsum("ij,ij->i", centroid, centroid))
 
     matches = ObjectMatches(
