@@ -268,3 +268,22 @@ def test_point_counts_without_a_stored_count():
     assert bare.counts is None
     np.testing.assert_array_equal(bare.point_counts(), img.counts)
     assert img.counts.sum() == np.count_nonzero(img.point_pixel >= 0)
+
+
+@settings(max_examples=50, deadline=None)
+@given(
+    seed=st.integers(0, 2**32 - 1),
+    height=st.integers(1, 16),
+    width=st.integers(1, 900),
+    empty_share=st.sampled_from([0.0, 0.3, 1.0]),
+)
+def test_pixel_points_equal_to_points(seed, height, width, empty_share):
+    rng = np.random.default_rng(seed)
+    ranges = rng.uniform(0.5, 120.0, (height, width)).astype(np.float32)
+    ranges[rng.random((height, width)) < empty_share] = 0.0
+    elevation = np.sort(rng.uniform(-0.5, 0.1, height))[::-1]
+    img = from_sensor_image(ranges, elevation)
+    np.testing.assert_array_equal(img.pixel_points(), img.to_points()[img.point_pixel])
+    some = rng.integers(0, height * width, 50)
+    np.testing.assert_array_equal(img.pixel_points(some), img.to_points()[some])
+    np.testing.assert_array_equal(img.point_counts(), (ranges > 0).astype(np.int32))

@@ -148,7 +148,9 @@ def read_png_range(path: str | Path, cfg: ImgCfg) -> np.ndarray:
         raise FlicInputError(
             path, f"is {size[0]}x{size[1]} but img.cfg says {cfg.width}x{cfg.height}"
         )
-    return pixels.astype(np.float32) / np.float32(RANGE_SCALE)
+    ranges = pixels.astype(np.float32)
+    ranges /= np.float32(RANGE_SCALE)
+    return ranges
 
 
 def write_png_range(path: str | Path, ranges_m: np.ndarray) -> None:
@@ -285,5 +287,4 @@ class MoosmannDataset:
         """
         cfg = self._cfg[ref.sequence]
         image = from_sensor_image(read_png_range(ref.path, cfg), cfg.elevation())
-        points = image.to_points()[image.point_pixel]
-        return Frame(ref, points, None, image)
+        return Frame(ref, image.pixel_points(), None, image)
