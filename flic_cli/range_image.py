@@ -391,26 +391,86 @@ def _select(buf: np.ndarray, lo: int, hi: int, k: int) -> float:
 
 
 @njit(cache=True)
+def _max_below(values: np.ndarray, lo: int, hi: int, limit: float) -> float:
+    """Largest of ``values[lo:hi]`` below ``limit`` (-inf when none is)."""
+    out = -np.inf
+    for q in range(lo, hi):
+        v = values[q]
+        if v < limit and v > out:
+            out = v
+    return out
+
+
+@njit(cache=True)
+def _median(values: np.ndarray, start: int, stop: int, buf: np.ndarray) -> float:
+    """``np.median(values[start:stop])`` of finite values, exactly (reorders the segment).
+
+    np.median is the middle value, or the mean of the two middle values. Both are found by a
+    quickselect; on a long segment, first narrow it down: a sorted sample of 31 values gives a
+    band ``[a, b]`` around the middle, one branch-free pass counts the values below ``a`` and copies
+    those inside the band to ``buf``, and when the middle ranks fall inside the band only the band
+    (a few per cent of the segment) is searched. Otherwise (or on a short segment) the whole
+    segment is.
+    """
+    n = stop - start
+    k = n // 2  # rank of the upper middle value; the lower one has rank k - 1 when n is even
+    even = n % 2 == 0
+    if n >= 512:
+        m = 31
+        sample = np.empty(m)
+        step = n // m
+        for q in range(m):  # insertion sort of an evenly spread sample
+            v = values[start + q * step]
+            j = q
+            while j > 0 and sample[j - 1] > v:
+                sample[j] = sample[j - 1]
+                j -= 1
+            sample[j] = v
+        pos = k * m // n
+        a = sample[max(pos - 3, 0)]
+        b = sample[min(pos + 3, m - 1)]
+        below = 0
+        inside = 0
+        for q in range(start, stop):
+            v = values[q]
+            below += v < a
+            buf[inside] = v
+            inside += (v >= a) & (v <= b)
+        if below <= k < below + inside:
+            kk = k - below
+            upper = _select(buf, 0, inside, kk)  # leaves buf[:kk] <= upper
+            if not even:
+                return upper
+            if kk > 0:
+                lower = buf[0]
+                for q in range(1, kk):
+                    if buf[q] > lower:
+                        lower = buf[q]
+            else:  # the lower middle value is the largest one below the band
+                lower = _max_below(values, start, stop, a)
+            return (lower + upper) / 2.0
+    upper = _select(values, start, stop, start + k)  # leaves values[start:start + k] <= upper
+    if not even:
+        return upper
+    lower = values[start]
+    for q in range(start + 1, start + k):
+        if values[q] > lower:
+            lower = values[q]
+    return (lower + upper) / 2.0
+
+
+@njit(cache=True)
 def _segment_medians(values: np.ndarray, counts: np.ndarray) -> np.ndarray:
-    """``np.median`` of each consecutive segment of ``values`` (segment r has ``counts[r]``
-    elements); NaN for an empty segment. ``values`` is reordered within each segment."""
+    """``np.median`` of each consecutive segment of finite ``values`` (segment r has
+    ``counts[r]`` elements); NaN for an empty segment. Reorders ``values`` within segments."""
     out = np.full(counts.size, np.nan)
+    buf = np.empty(max(counts.max(), 1) if counts.size else 1)
     start = 0
     for r in range(counts.size):
         n = counts[r]
         if n > 0:
-            stop = start + n
-            half = start + n // 2
-            upper = _select(values, start, stop, half)
-            if n % 2:
-                out[r] = upper
-            else:  # np.median: mean of the two middle values; the lower one is max(left part)
-                lower = values[start]
-                for t in range(start + 1, half):
-                    if values[t] > lower:
-                        lower = values[t]
-                out[r] = (lower + upper) / 2.0
-            start = stop
+            out[r] = _median(values, start, start + n, buf)
+            start += n
     return out
 
 

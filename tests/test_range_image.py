@@ -287,3 +287,29 @@ def test_pixel_points_equal_to_points(seed, height, width, empty_share):
     some = rng.integers(0, height * width, 50)
     np.testing.assert_array_equal(img.pixel_points(some), img.to_points()[some])
     np.testing.assert_array_equal(img.point_counts(), (ranges > 0).astype(np.int32))
+
+
+@settings(max_examples=200, deadline=None)
+@given(
+    seed=st.integers(0, 2**32 - 1),
+    lengths=st.lists(st.integers(0, 3000), min_size=1, max_size=6),
+    distinct=st.sampled_from([1, 2, 3, 40, 0]),  # 0: continuous values
+)
+def test_segment_medians_equal_np_median(seed, lengths, distinct):
+    from flic_cli.range_image import _segment_medians
+
+    rng = np.random.default_rng(seed)
+    n = sum(lengths)
+    values = rng.normal(size=n)
+    if distinct:  # many ties, also around the middle
+        values = rng.choice(rng.normal(size=distinct), n)
+    if rng.random() < 0.3:  # sorted runs, as elevations along a ring can be
+        values = np.sort(values)
+    counts = np.array(lengths, dtype=np.int64)
+    bounds = np.concatenate([[0], np.cumsum(counts)])
+    want = [
+        np.median(values[a:b]) if b > a else np.nan
+        for a, b in zip(bounds[:-1], bounds[1:], strict=True)
+    ]
+    got = _segment_medians(values.copy(), counts)
+    np.testing.assert_array_equal(got, want)
