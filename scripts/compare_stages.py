@@ -196,7 +196,9 @@ def count_all(args: argparse.Namespace) -> None:
 
 
 def callgrind(args: argparse.Namespace) -> None:
-    with tempfile.TemporaryDirectory() as tmp:
+    with tempfile.TemporaryDirectory() as tmp_dir:
+        tmp = args.keep_dumps or tmp_dir
+        Path(tmp).mkdir(parents=True, exist_ok=True)
         cmd = [
             "valgrind",
             "--tool=callgrind",
@@ -221,21 +223,39 @@ def callgrind(args: argparse.Namespace) -> None:
         res = subprocess.run(cmd, capture_output=True, text=True, env=env)
         if res.returncode:
             raise SystemExit(f"valgrind run failed: {' '.join(cmd)}\n{res.stderr[-2000:]}")
-        counts = {}
+        counts, libm = {}, {}
         for dump in Path(tmp).glob("cg.out*"):
             text = dump.read_text()
             name = re.search(r"^desc: Trigger: Client Request: (\S+)$", text, re.M)
             total = re.search(r"^(?:summary|totals): (\d+)", text, re.M)
             if name and total:
                 counts[name.group(1)] = int(total.group(1)) / args.frames
+                libm[name.group(1)] = libm_share(dump) / args.frames
     print(
         f"instructions per frame (valgrind --tool=callgrind, {args.frames} frames, "
-        f"{args.method}, {args.setting} setting):"
+        f"{args.method}, {args.setting} setting); in brackets those in libm (numpy's atan2 and "
+        "asin, scalar under valgrind, AVX-512 SVML natively):"
     )
-    print(f"  {'stage':8s} {'base':>14s} {'new':>14s} {'ratio':>7s}")
+    print(f"  {'stage':8s} {'base':>26s} {'new':>26s} {'ratio':>7s}")
     for stage in args.stages.split(","):
         b, w = counts[f"{stage}:base"], counts[f"{stage}:new"]
-        print(f"  {stage:8s} {b:14,.0f} {w:14,.0f} {b / w:6.2f}x")
+        lb, lw = libm[f"{stage}:base"], libm[f"{stage}:new"]
+        print(f"  {stage:8s} {b:14,.0f} ({lb:9,.0f}) {w:14,.0f} ({lw:9,.0f}) {b / w:6.2f}x")
+
+
+def libm_share(dump: Path) -> int:
+    """Instructions of one callgrind dump spent in libm's math functions (callgrind_annotate)."""
+    out = subprocess.run(
+        ["callgrind_annotate", "--inclusive=no", "--threshold=100", str(dump)],
+        capture_output=True,
+        text=True,
+    ).stdout
+    total = 0
+    for line in out.splitlines():
+        m = re.match(r"\s*([\d,]+) \(", line)
+        if m and ("libm.so" in line or "ieee754" in line):
+            total += int(m.group(1).replace(",", ""))
+    return total
 
 
 def main() -> None:
@@ -248,6 +268,9 @@ def main() -> None:
     parser.add_argument("--frames", type=int, default=None, help="use the first N frames")
     parser.add_argument("--callgrind", action="store_true", help="count instructions instead")
     parser.add_argument("--stages", default=",".join(STAGES), help="stages to count")
+    parser.add_argument(
+        "--keep-dumps", help="folder for callgrind's dumps (see callgrind_annotate)", default=None
+    )
     parser.add_argument("--count-all", action="store_true", help=argparse.SUPPRESS)
     args = parser.parse_args()
     args.data = Path(args.data)
