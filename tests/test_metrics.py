@@ -513,3 +513,22 @@ def test_score_frame_on_an_empty_frame() -> None:
     m, stats = score_frame(np.zeros(0, dtype=np.uint32), np.zeros(0, dtype=np.int64))
     assert len(m) == 0
     assert stats == {"clusters": 0, "objects": 0, "over_segmented": 0, "under_segmented": 0}
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_score_frame_with_hundreds_of_objects(seed: int) -> None:
+    # more distinct object labels than the first hash table holds (it grows), in shuffled order
+    rng = np.random.default_rng(seed)
+    n = 4000
+    classes, instances = rng.choice(THING_CLASSES, 300), rng.integers(1, 1 << 16, 300)
+    objects = [lab(int(c), int(i)) for c, i in zip(classes, instances, strict=True)]
+    gt = np.array(objects + [lab(ROAD)] * 50, dtype=np.uint32)[rng.integers(0, 350, n)]
+    pred = rng.integers(-1, 60, n)
+    m, stats = score_frame(gt, pred, min_points=5, min_fragment_points=2)
+    ref = reference_match(gt, pred, 5, 2)
+    assert m.label.tolist() == sorted(ref) and len(ref) > 200
+    for i, o in enumerate(m.label.tolist()):
+        cluster, iou, fragments = ref[o]
+        assert (m.cluster[i], m.iou[i], m.n_fragments[i]) == (cluster, float(iou), fragments)
+    assert stats["objects"] == len(ref)
+    assert stats["under_segmented"] == reference_under_segmented(gt, pred, sorted(ref), 2)

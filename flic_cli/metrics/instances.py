@@ -156,26 +156,65 @@ def _as_pred(pred: np.ndarray, n: int) -> np.ndarray:
 @njit(cache=True)
 def _scan_frame(
     gt: np.ndarray, pred: np.ndarray, thing_lut: np.ndarray, n_ids: int
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """One pass over the points: size of every cluster id (dense, ``0 < id < n_ids``) and, for
-    every point of a thing class with an instance id, its index, label and cluster id."""
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """One pass over the points of a frame, one over its thing points.
+
+    Returns
+    -------
+    sizes : (n_ids,) int64 points of every cluster id (``0 < id < n_ids``; ``sizes[0] = 0``)
+    labels : (D,) uint32 the distinct labels of the thing points (objects), in order of appearance
+    counts : (D,) int64 their numbers of points
+    index : (T,) int64 index of every point of a thing class with an instance id
+    slot : (T,) int64 its label's position in ``labels``
+    cluster : (T,) int64 its cluster id
+    """
     sizes = np.zeros(n_ids, dtype=np.int64)
     n = gt.size
     index = np.empty(n, dtype=np.int64)
-    label = np.empty(n, dtype=np.uint32)
+    thing_label = np.empty(n, dtype=np.uint32)
     cluster = np.empty(n, dtype=np.int64)
     t = 0
+    runs = 0  # runs of equal labels among the thing points: at least the distinct labels
+    last = np.uint32(0)  # never a thing label (no instance id)
     for i in range(n):
         p = pred[i]
         if p > 0:
             sizes[p] += 1
         g = gt[i]
         if g > 0xFFFF and thing_lut[g & 0xFFFF]:
+            runs += g != last
+            last = g
             index[t] = i
-            label[t] = g
+            thing_label[t] = g
             cluster[t] = p
             t += 1
-    return sizes, index[:t], label[:t], cluster[:t]
+    # distinct labels: open addressing (linear probing), table at most half full
+    size = 64
+    while size < 2 * runs:
+        size *= 2
+    table = np.full(size, -1, dtype=np.int64)  # hash slot -> position in labels
+    labels = np.empty(runs, dtype=np.uint32)
+    counts = np.zeros(runs, dtype=np.int64)
+    slot = np.empty(t, dtype=np.int64)
+    n_labels = 0
+    last = np.uint32(0)
+    s = -1
+    for q in range(t):
+        g = thing_label[q]
+        if g != last:
+            k = np.int64((np.uint64(g) * np.uint64(0x9E3779B97F4A7C15)) >> np.uint64(40))
+            k &= size - 1
+            while table[k] >= 0 and labels[table[k]] != g:
+                k = (k + 1) & (size - 1)
+            if table[k] < 0:
+                table[k] = n_labels
+                labels[n_labels] = g
+                n_labels += 1
+            s = table[k]
+            last = g
+        counts[s] += 1
+        slot[q] = s
+    return sizes, labels[:n_labels], counts[:n_labels], index[:t], slot, cluster[:t]
 
 
 @njit(cache=True)
@@ -318,18 +357,19 @@ def score_frame(
         p[clustered] = inverse.reshape(-1) + 1
         top = cluster_ids.size
     n_ids = max(top, 0) + 1
-    sizes, thing_index, thing_labels, thing_cluster = _scan_frame(gt, p, THING_LUT, n_ids)
+    sizes, labels, label_counts, thing_index, thing_slot, thing_cluster = _scan_frame(
+        gt, p, THING_LUT, n_ids
+    )
 
     # objects: thing labels with at least min_points points, in label order
-    all_labels, label_inv, label_counts = np.unique(
-        thing_labels, return_inverse=True, return_counts=True
-    )
-    keep = label_counts >= min_points
-    obj_labels = all_labels[keep]
-    obj_sizes = label_counts[keep].astype(np.int64)
+    order = np.argsort(labels)
+    keep = label_counts[order] >= min_points
+    obj_labels = labels[order][keep]
+    obj_sizes = label_counts[order][keep]
     n_obj = obj_labels.size
-    remap = np.where(keep, np.cumsum(keep) - 1, -1)
-    thing_obj = remap[label_inv.reshape(-1)]
+    slot_obj = np.empty(labels.size, dtype=np.int64)
+    slot_obj[order] = np.where(keep, np.cumsum(keep) - 1, -1)
+    thing_obj = slot_obj[thing_slot]
 
     keys, pair_overlap = np.unique(_pair_keys(thing_obj, thing_cluster, n_ids), return_counts=True)
     pair_obj, pair_cluster = keys // n_ids, keys % n_ids
