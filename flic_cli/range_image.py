@@ -625,9 +625,84 @@ def from_sensor_image(ranges: np.ndarray, elevation: np.ndarray) -> RangeImage:
     ranges : (H, W) float32 array, metres, 0 = no measurement.
     elevation : (H,) row elevations in radians, positive up, row 0 = top.
     """
+    return _from_sensor_image(ranges, elevation, False)[0]
+
+
+def from_sensor_image_with_points(
+    ranges: np.ndarray, elevation: np.ndarray
+) -> tuple[RangeImage, np.ndarray]:
+    """:func:`from_sensor_image` and the scan's points in one pass over the image.
+
+    Returns
+    -------
+    image : RangeImage
+    points : (N, 3) float32 Cartesian point of every valid pixel, in the order of
+        ``image.point_pixel`` (row-major), equal to ``image.to_points()[image.point_pixel]``.
+    """
+    image, points = _from_sensor_image(ranges, elevation, True)
+    assert points is not None
+    return image, points
+
+
+def _from_sensor_image(
+    ranges: np.ndarray, elevation: np.ndarray, with_points: bool
+) -> tuple[RangeImage, np.ndarray | None]:
     ranges = np.ascontiguousarray(ranges, dtype=np.float32)
-    valid = ranges > 0
-    pix = np.flatnonzero(valid).astype(np.int64)
-    return RangeImage(
-        ranges, np.asarray(elevation, dtype=np.float64), pix, "native", valid.astype(np.int32)
+    elevation = np.asarray(elevation, dtype=np.float64)
+    pix, counts = _sensor_pixels(ranges)
+    image = RangeImage(ranges, elevation, pix, "native", counts)
+    if not with_points:
+        return image, None
+    az = image.azimuth
+    points = _sensor_points(
+        ranges, np.cos(elevation), np.sin(elevation), np.cos(az), np.sin(az), pix.size
     )
+    return image, points
+
+
+@njit(cache=True)
+def _sensor_pixels(ranges: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Valid pixels of an (H, W) image (row-major flat indices) and points per pixel (0 or 1)."""
+    h, w = ranges.shape
+    n = 0
+    for row in range(h):
+        for col in range(w):
+            n += ranges[row, col] > 0
+    pix = np.empty(n, dtype=np.int64)
+    counts = np.zeros((h, w), dtype=np.int32)
+    j = 0
+    for row in range(h):
+        for col in range(w):
+            if ranges[row, col] > 0:
+                pix[j] = row * w + col
+                counts[row, col] = 1
+                j += 1
+    return pix, counts
+
+
+@njit(cache=True)
+def _sensor_points(
+    ranges: np.ndarray,
+    cos_el: np.ndarray,
+    sin_el: np.ndarray,
+    cos_az: np.ndarray,
+    sin_az: np.ndarray,
+    n: int,
+) -> np.ndarray:
+    """(n, 3) float32 points of the ``n`` valid pixels of an (H, W) image in row-major order,
+    computed as :func:`_pixel_points` does."""
+    h, w = ranges.shape
+    out = np.empty(3 * n, dtype=np.float32)
+    j = 0
+    for row in range(h):
+        ce = cos_el[row]
+        se = sin_el[row]
+        for col in range(w):
+            rf = ranges[row, col]
+            if rf > 0:
+                r = np.float64(rf)
+                out[3 * j] = np.float32(r * ce * cos_az[col])
+                out[3 * j + 1] = np.float32(r * ce * sin_az[col])
+                out[3 * j + 2] = np.float32(r * se)
+                j += 1
+    return out.reshape(n, 3)

@@ -8,7 +8,12 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from flic_cli.io import open_dataset
-from flic_cli.range_image import from_sensor_image, project_points, recover_rings
+from flic_cli.range_image import (
+    from_sensor_image,
+    from_sensor_image_with_points,
+    project_points,
+    recover_rings,
+)
 
 
 def naive_rows(points: np.ndarray) -> int:
@@ -277,13 +282,18 @@ def test_point_counts_without_a_stored_count():
     width=st.integers(1, 900),
     empty_share=st.sampled_from([0.0, 0.3, 1.0]),
 )
-def test_pixel_points_equal_to_points(seed, height, width, empty_share):
+def test_sensor_image_points_equal_to_points(seed, height, width, empty_share):
     rng = np.random.default_rng(seed)
     ranges = rng.uniform(0.5, 120.0, (height, width)).astype(np.float32)
     ranges[rng.random((height, width)) < empty_share] = 0.0
     elevation = np.sort(rng.uniform(-0.5, 0.1, height))[::-1]
     img = from_sensor_image(ranges, elevation)
     np.testing.assert_array_equal(img.pixel_points(), img.to_points()[img.point_pixel])
+    np.testing.assert_array_equal(img.point_pixel, np.flatnonzero(ranges > 0))
+    again, points = from_sensor_image_with_points(ranges, elevation)
+    np.testing.assert_array_equal(points, img.to_points()[img.point_pixel])
+    np.testing.assert_array_equal(again.point_pixel, img.point_pixel)
+    np.testing.assert_array_equal(again.counts, img.counts)
     some = rng.integers(0, height * width, 50)
     np.testing.assert_array_equal(img.pixel_points(some), img.to_points()[some])
     np.testing.assert_array_equal(img.point_counts(), (ranges > 0).astype(np.int32))

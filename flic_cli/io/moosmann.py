@@ -19,7 +19,7 @@ from flic_cli.errors import FlicInputError
 from flic_cli.io.atomic import atomic_write, atomic_write_bytes, read_bytes, read_text
 from flic_cli.io.base import Frame, FrameRef, select_sequences
 from flic_cli.io.semantickitti import frames_text, in_frames
-from flic_cli.range_image import from_sensor_image
+from flic_cli.range_image import from_sensor_image_with_points
 
 FORMAT = "moosmann"
 RANGE_SCALE = 500.0
@@ -286,5 +286,7 @@ class MoosmannDataset:
         ``points[i]`` is the point of pixel ``image.point_pixel[i]`` (row-major pixel order).
         """
         cfg = self._cfg[ref.sequence]
-        image = from_sensor_image(read_png_range(ref.path, cfg), cfg.elevation())
-        return Frame(ref, image.pixel_points(), None, image)
+        image, points = from_sensor_image_with_points(
+            read_png_range(ref.path, cfg), cfg.elevation()
+        )
+        return Frame(ref, points, None, image)
