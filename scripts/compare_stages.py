@@ -13,6 +13,7 @@ Usage::
 
     python scripts/compare_stages.py [DATA] [--base REV] [--repeat 3] [--setting ground]
     python scripts/compare_stages.py [DATA] --callgrind [--frames 10]
+    python scripts/compare_stages.py --moosmann LOG [--repeat 3]    # Moosmann frame loading
 
 The base revision defaults to a74c9eb, the last commit before the speed work of issue 11.
 """
@@ -57,23 +58,26 @@ STAGES = tuple(MODULES)
 def load_base(rev: str) -> dict[str, ModuleType]:
     """The base revision's modules, imported from files (so that numba can cache their kernels)."""
     folder = Path(tempfile.gettempdir()) / f"flic-compare-{rev}"
+    return {
+        stage: load_module(rev, path, f"base_{stage}", folder) for stage, path in MODULES.items()
+    }
+
+
+def load_module(rev: str, path: str, name: str, folder: Path) -> ModuleType:
+    """Module ``path`` of git revision ``rev``, written to ``folder`` and imported as ``name``."""
     folder.mkdir(exist_ok=True)
-    out = {}
-    for stage, path in MODULES.items():
-        src = subprocess.run(
-            ["git", "show", f"{rev}:{path}"], cwd=ROOT, check=True, capture_output=True, text=True
-        ).stdout
-        name = f"base_{stage}"
-        file = folder / f"{name}.py"
-        if not file.exists() or file.read_text() != src:
-            file.write_text(src)
-        spec = importlib.util.spec_from_file_location(name, file)
-        assert spec is not None and spec.loader is not None
-        module = importlib.util.module_from_spec(spec)
-        sys.modules[name] = module
-        spec.loader.exec_module(module)
-        out[stage] = module
-    return out
+    src = subprocess.run(
+        ["git", "show", f"{rev}:{path}"], cwd=ROOT, check=True, capture_output=True, text=True
+    ).stdout
+    file = folder / f"{name}.py"
+    if not file.exists() or file.read_text() != src:
+        file.write_text(src)
+    spec = importlib.util.spec_from_file_location(name, file)
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[name] = module
+    spec.loader.exec_module(module)
+    return module
 
 
 class Frames:
@@ -156,6 +160,37 @@ def time_both(args: argparse.Namespace) -> None:
     for stage in STAGES:
         b, w = np.median(times[(stage, "base")]), np.median(times[(stage, "new")])
         print(f"  {stage:8s} {b:8.3f} {w:8.3f} {b / w:8.2f}x  {mismatches[stage]} of {n} frames")
+
+
+def time_moosmann(args: argparse.Namespace) -> None:
+    """Old and new ``MoosmannDataset.load`` (PNG decode, checks, points) on every frame of a log."""
+    folder = Path(tempfile.gettempdir()) / f"flic-compare-{args.base}"
+    base = load_module(args.base, "flic_cli/io/moosmann.py", "base_moosmann", folder)
+    datasets = {"base": base.MoosmannDataset(args.moosmann), "new": open_dataset(args.moosmann)}
+    refs = datasets["new"].refs()[: args.frames]
+    times: dict[str, list[float]] = {"base": [], "new": []}
+    differ = 0
+    for name in times:
+        datasets[name].load(refs[0])
+    for rep in range(args.repeat):
+        for i, ref in enumerate(refs):
+            out = {}
+            for name in ("base", "new") if (i + rep) % 2 == 0 else ("new", "base"):
+                t = time.perf_counter()
+                out[name] = datasets[name].load(ref)
+                times[name].append(1e3 * (time.perf_counter() - t))
+            a, b = out["base"], out["new"]
+            differ += rep == 0 and not (
+                np.array_equal(a.points, b.points)
+                and np.array_equal(a.image.ranges, b.image.ranges)
+                and np.array_equal(a.image.point_pixel, b.image.point_pixel)
+            )
+    b, w = np.median(times["base"]), np.median(times["new"])
+    print(
+        f"Moosmann load, {len(refs)} frames x {args.repeat} of {args.moosmann}, one thread, "
+        f"base {args.base} vs working tree: median {b:.3f} -> {w:.3f} ms ({b / w:.2f}x), "
+        f"results differ on {differ} frames"
+    )
 
 
 def current() -> dict[str, ModuleType]:
@@ -267,16 +302,30 @@ def main() -> None:
     parser.add_argument("--repeat", type=int, default=3, help="passes over the frames")
     parser.add_argument("--frames", type=int, default=None, help="use the first N frames")
     parser.add_argument("--callgrind", action="store_true", help="count instructions instead")
+    parser.add_argument(
+        "--moosmann", type=Path, default=None, help="time the loading of this Moosmann log instead"
+    )
     parser.add_argument("--stages", default=",".join(STAGES), help="stages to count")
     parser.add_argument(
         "--keep-dumps", help="folder for callgrind's dumps (see callgrind_annotate)", default=None
     )
+    parser.add_argument(
+        "--keep-freed-memory",
+        action="store_true",
+        help="glibc keeps freed memory for reuse (see profile_stages.py)",
+    )
     parser.add_argument("--count-all", action="store_true", help=argparse.SUPPRESS)
     args = parser.parse_args()
     args.data = Path(args.data)
+    if args.keep_freed_memory:
+        from profile_stages import keep_freed_memory  # scripts/ is on sys.path
+
+        keep_freed_memory()
     with thread_limits(1):
         if args.count_all:
             count_all(args)
+        elif args.moosmann:
+            time_moosmann(args)
         elif args.callgrind:
             if args.frames is None:
                 args.frames = 10
