@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -274,6 +275,84 @@ def test_scan_without_finite_points(tmp_path: Path) -> None:
     write_bin(tmp_path / "x.bin", np.full((3, 4), np.nan))
     with pytest.raises(FlicInputError, match="none of its 3 points has finite coordinates"):
         read_scan(tmp_path / "x.bin")
+
+
+def reference_read_scan(bin_path: Path, label_path: Path | None) -> tuple:
+    """The reader that issue 11 replaced (bytes, a copy, a mask over every point), as reference.
+
+    Returns ``(points, remission, labels, finite, n_dropped)``.
+    """
+    raw = np.frombuffer(bin_path.read_bytes(), dtype="<f4").reshape(-1, 4).astype(np.float32)
+    labels = None
+    if label_path is not None:
+        labels = np.frombuffer(label_path.read_bytes(), dtype="<u4").astype(np.uint32)
+    keep = np.isfinite(raw[:, :3]).all(axis=1)
+    n_bad = raw.shape[0] - int(keep.sum())
+    if n_bad:
+        raw = raw[keep]
+        labels = None if labels is None else labels[keep]
+    return raw[:, :3], raw[:, 3], labels, None if n_bad == 0 else keep, n_bad
+
+
+SPECIAL = [np.nan, np.inf, -np.inf, 0.0, -0.0, 1e38, -1e-40]  # (-1e-40 is a float32 subnormal)
+
+
+@settings(max_examples=100, deadline=None)
+@given(
+    st.integers(1, 300).flatmap(
+        lambda n: st.tuples(
+            arrays(np.float32, (n, 4), elements=st.floats(width=32, allow_nan=False)),
+            st.lists(
+                st.tuples(st.integers(0, n - 1), st.integers(0, 3), st.sampled_from(SPECIAL)),
+                max_size=12,
+            ),
+        )
+    ),  # fmt: skip
+    st.booleans(),
+)
+def test_read_scan_equals_the_reference(
+    tmp_path_factory: pytest.TempPathFactory, case: tuple, with_labels: bool
+) -> None:
+    points, specials = case
+    for i, j, v in specials:
+        points[i, j] = v
+    folder = tmp_path_factory.mktemp("scan")
+    bin_path, label_path = folder / "x.bin", folder / "x.label"
+    points.astype("<f4").tofile(bin_path)
+    np.arange(points.shape[0], dtype="<u4").tofile(label_path)
+    lp = label_path if with_labels else None
+    ref = reference_read_scan(bin_path, lp)
+    if ref[4] == points.shape[0]:
+        with pytest.raises(FlicInputError, match="none of its"):
+            read_scan(bin_path, lp)
+        return
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        scan = read_scan(bin_path, lp)
+    assert len(caught) == (1 if ref[4] else 0)
+    for got, want in zip(scan, ref[:4], strict=True):
+        if want is None:
+            assert got is None
+        else:
+            np.testing.assert_array_equal(got, want)
+            assert got.flags.c_contiguous and got.flags.writeable and got.dtype == want.dtype
+    assert scan.points.shape == (scan.remission.shape[0], 3)
+
+
+def test_real_scans_equal_the_reference(kitti_root: Path) -> None:
+    ds = open_dataset(kitti_root)
+    for ref in ds.refs():
+        scan = read_scan(ref.path, ref.label_path)
+        want = reference_read_scan(ref.path, ref.label_path)
+        assert want[4] == 0 and scan.finite is None
+        for got, w in zip(scan[:3], want[:3], strict=True):
+            np.testing.assert_array_equal(got, w)
+
+
+def test_unreadable_scan(tmp_path: Path) -> None:
+    (tmp_path / "000000.bin").mkdir()
+    with pytest.raises(FlicInputError, match="cannot be read"):
+        read_bin(tmp_path / "000000.bin")
 
 
 @pytest.mark.parametrize(

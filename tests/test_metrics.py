@@ -16,6 +16,7 @@ from flic_cli.metrics import (
     ObjectMatches,
     distance_band,
     match_objects,
+    score_frame,
     segmentation_stats,
     summarize,
 )
@@ -444,3 +445,90 @@ def test_object_matches_is_frozen() -> None:
     assert isinstance(m, ObjectMatches)
     with pytest.raises(AttributeError):
         m.iou = np.zeros(1)  # type: ignore[misc]
+
+
+def reference_under_segmented(
+    gt: np.ndarray, pred: np.ndarray, objects: list[int], frag: int
+) -> int:
+    """Loop count of clusters holding at least ``frag`` points of each of two or more objects."""
+    clusters = sorted({int(c) for c in pred if c > 0})
+    return sum(
+        1
+        for c in clusters
+        if sum(1 for o in objects if np.sum((gt == o) & (pred == c)) >= frag) >= 2
+    )
+
+
+@settings(max_examples=300, deadline=None)
+@given(frames, st.sampled_from(["int64", "int32", "uint16", "bool", "big", "negative"]), st.data())
+def test_score_frame_equals_the_loop_reference(
+    case: tuple[list[int], list[int], int, int], ids: str, data: st.DataObject
+) -> None:
+    labels, clusters, min_points, min_frag = case
+    gt = np.array(labels, dtype=np.uint32)
+    pred = np.array(clusters, dtype=np.int64)
+    if ids == "big":  # ids far apart: renumbered before counting
+        pred = np.where(pred > 0, pred * 10**12 + 7, pred)
+    elif ids == "negative":
+        pred = np.where(pred > 0, pred, -(10**9))
+    elif ids in ("uint16", "bool"):
+        pred = np.maximum(pred, 0).astype(ids)
+    else:
+        pred = pred.astype(ids)
+    seed = data.draw(st.integers(0, 2**32 - 1))
+    points = np.random.default_rng(seed).normal(0, 30, (gt.size, 3)).astype(np.float32)
+
+    m, stats = score_frame(gt, pred, points, min_points=min_points, min_fragment_points=min_frag)
+    pred64 = pred.astype(np.int64)
+    ref = reference_match(gt, pred64, min_points, min_frag)
+    objects = sorted(ref)
+    assert m.label.tolist() == objects and m.label.dtype == np.uint32
+    assert m.semantic.tolist() == [o & 0xFFFF for o in objects]
+    assert m.instance.tolist() == [o >> 16 for o in objects]
+    for i, o in enumerate(objects):
+        c, iou, frags = ref[o]
+        in_o = gt == o
+        assert m.n_points[i] == in_o.sum()
+        assert m.cluster[i] == c and m.iou[i] == float(iou) and m.n_fragments[i] == frags
+        assert m.overlap[i] == (np.sum(in_o & (pred64 == c)) if c >= 0 else 0)
+        centroid = points[in_o].astype(np.float64).mean(axis=0)
+        assert m.distance[i] == pytest.approx(np.linalg.norm(centroid), rel=1e-12, abs=1e-12)
+    for field in ("semantic", "instance", "n_points", "cluster", "overlap", "n_fragments"):
+        assert getattr(m, field).dtype == np.int64
+    assert stats == {
+        "clusters": len({int(c) for c in pred64 if c > 0}),
+        "objects": len(objects),
+        "over_segmented": sum(1 for o in objects if ref[o][2] >= 2),
+        "under_segmented": reference_under_segmented(gt, pred64, objects, min_frag),
+    }
+    # the two public functions give the same as score_frame
+    alone = match_objects(gt, pred, points, min_points=min_points, min_fragment_points=min_frag)
+    for a, b in zip(alone.as_dict().values(), m.as_dict().values(), strict=True):
+        np.testing.assert_array_equal(a, b)
+    assert segmentation_stats(gt, pred, min_points, min_frag) == stats
+    assert np.isnan(match_objects(gt, pred, min_points=min_points).distance).all()
+
+
+def test_score_frame_on_an_empty_frame() -> None:
+    m, stats = score_frame(np.zeros(0, dtype=np.uint32), np.zeros(0, dtype=np.int64))
+    assert len(m) == 0
+    assert stats == {"clusters": 0, "objects": 0, "over_segmented": 0, "under_segmented": 0}
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_score_frame_with_hundreds_of_objects(seed: int) -> None:
+    # more distinct object labels than the first hash table holds (it grows), in shuffled order
+    rng = np.random.default_rng(seed)
+    n = 4000
+    classes, instances = rng.choice(THING_CLASSES, 300), rng.integers(1, 1 << 16, 300)
+    objects = [lab(int(c), int(i)) for c, i in zip(classes, instances, strict=True)]
+    gt = np.array(objects + [lab(ROAD)] * 50, dtype=np.uint32)[rng.integers(0, 350, n)]
+    pred = rng.integers(-1, 60, n)
+    m, stats = score_frame(gt, pred, min_points=5, min_fragment_points=2)
+    ref = reference_match(gt, pred, 5, 2)
+    assert m.label.tolist() == sorted(ref) and len(ref) > 200
+    for i, o in enumerate(m.label.tolist()):
+        cluster, iou, fragments = ref[o]
+        assert (m.cluster[i], m.iou[i], m.n_fragments[i]) == (cluster, float(iou), fragments)
+    assert stats["objects"] == len(ref)
+    assert stats["under_segmented"] == reference_under_segmented(gt, pred, sorted(ref), 2)

@@ -4,9 +4,16 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from flic_cli.io import open_dataset
-from flic_cli.range_image import from_sensor_image, project_points, recover_rings
+from flic_cli.range_image import (
+    from_sensor_image,
+    from_sensor_image_with_points,
+    project_points,
+    recover_rings,
+)
 
 
 def naive_rows(points: np.ndarray) -> int:
@@ -91,3 +98,228 @@ def test_sensor_image_points_round_trip():
         pts, width=16, mode="spherical", rows=4, fov_up_deg=3.0, fov_down_deg=-5.0
     )
     np.testing.assert_array_equal(again.point_pixel, img.point_pixel)
+
+
+# --------------------------------------------------------------------------- equivalence with the
+# numpy implementation that the numba kernels replaced (issue 11), kept here verbatim as reference
+
+
+def reference_recover_rings(points, expected_rows=64, min_ring_points=200, azimuth=None):
+    if points.shape[0] == 0:
+        return None
+    if azimuth is None:
+        azimuth = np.arctan2(points[:, 1].astype(np.float64), points[:, 0].astype(np.float64))
+    spiral = np.unwrap(azimuth)
+    spiral -= 2.0 * np.pi * np.floor(spiral[: min(50, spiral.size)].min() / (2.0 * np.pi))
+    ring = np.maximum.accumulate(np.floor(spiral / (2.0 * np.pi)).astype(np.int64))
+    ring -= ring[0]
+    counts = np.bincount(ring)
+    if counts.size != expected_rows or counts.min() < min_ring_points:
+        return None
+    return ring
+
+
+def reference_row_elevation(elev_pts, rows, n_rows):
+    bounds = np.searchsorted(rows, np.arange(n_rows + 1))
+    out = np.full(n_rows, np.nan)
+    for r in range(n_rows):
+        if bounds[r + 1] > bounds[r]:
+            out[r] = np.median(elev_pts[bounds[r] : bounds[r + 1]])
+    ok = np.isfinite(out)
+    if not ok.any():
+        return np.linspace(np.radians(3.0), np.radians(-25.0), n_rows)
+    idx = np.arange(n_rows)
+    return np.interp(idx, idx[ok], out[ok])
+
+
+def reference_fill(rng, rows, cols, n_rows, width):
+    pix = rows * width + cols
+    ranges = np.zeros(n_rows * width, dtype=np.float32)
+    for i in range(pix.size):  # the nearest point of each pixel wins
+        p = pix[i]
+        if ranges[p] == 0.0 or rng[i] < ranges[p]:
+            ranges[p] = rng[i]
+    return ranges.reshape(n_rows, width), pix
+
+
+def reference_project(
+    points, width=2048, mode="rings", rows=64, fov_up_deg=3.0, fov_down_deg=-25.0, keep=None
+):
+    """(ranges, elevation, point_pixel, projection) as computed before the numba kernels."""
+    xyz = np.asarray(points[:, :3], dtype=np.float64)
+    rng = np.sqrt(np.einsum("ij,ij->i", xyz, xyz))
+    az = np.arctan2(xyz[:, 1], xyz[:, 0])
+    cols = np.floor((np.pi - az) / (2.0 * np.pi) * width).astype(np.int64) % width
+    with np.errstate(invalid="ignore", divide="ignore"):
+        elev = np.arcsin(np.clip(xyz[:, 2] / np.maximum(rng, 1e-9), -1.0, 1.0))
+    ring = reference_recover_rings(xyz, rows, azimuth=az) if mode == "rings" else None
+    if ring is not None:
+        elevation = reference_row_elevation(elev, ring, rows)
+        if keep is not None:
+            rng, ring, cols = rng[keep], ring[keep], cols[keep]
+        ranges, pix = reference_fill(rng.astype(np.float32), ring, cols, rows, width)
+        return ranges, elevation, pix, "rings"
+    if keep is not None:
+        rng, elev, cols = rng[keep], elev[keep], cols[keep]
+    up, down = np.radians(fov_up_deg), np.radians(fov_down_deg)
+    r_idx = np.floor((up - elev) / (up - down) * rows).astype(np.int64)
+    inside = (r_idx >= 0) & (r_idx < rows) & (rng > 0)
+    elevation = up - (np.arange(rows) + 0.5) * (up - down) / rows
+    ranges, pix_in = reference_fill(
+        rng[inside].astype(np.float32), r_idx[inside], cols[inside], rows, width
+    )
+    pix = np.full(rng.shape[0], -1, dtype=np.int64)
+    pix[inside] = pix_in
+    return ranges, elevation, pix, "spherical"
+
+
+def assert_same_projection(points, **kwargs):
+    """The projection equals the reference bit for bit, and counts the points of every pixel."""
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        ranges, elevation, pix, projection = reference_project(points, **kwargs)
+        img = project_points(points, **kwargs)
+    assert img.projection == projection
+    np.testing.assert_array_equal(img.ranges, ranges)
+    np.testing.assert_array_equal(img.elevation, elevation)
+    np.testing.assert_array_equal(img.point_pixel, pix)
+    has = pix[pix >= 0]
+    counts = np.bincount(has, minlength=ranges.size).reshape(ranges.shape)
+    np.testing.assert_array_equal(img.point_counts(), counts)
+    assert np.all(counts[ranges > 0] > 0)  # (a pixel of points at range 0 only keeps range 0)
+    return img
+
+
+def test_projection_equals_the_reference_on_every_shared_frame(kitti_root):
+    ds = open_dataset(kitti_root)
+    from flic_cli.classes import ground_mask
+
+    for ref in ds.refs():
+        frame = ds.load(ref)
+        img = assert_same_projection(frame.points)
+        assert img.projection == "rings"
+        np.testing.assert_array_equal(
+            recover_rings(frame.points), reference_recover_rings(frame.points)
+        )
+        assert_same_projection(frame.points, keep=~ground_mask(frame.labels))
+        assert_same_projection(frame.points, mode="spherical")
+
+
+def synthetic_scan(
+    seed: int, rows: int, per_ring: int, jitter: float, dtype, origin: bool = False
+) -> np.ndarray:
+    """Rings in scan order: each sweeps counter-clockwise from just left of straight ahead.
+
+    ``jitter`` (radians) shakes the azimuth (0.02 crosses the back seam back and forth, 1.0
+    breaks the scan order); ``origin`` puts 2 % of the points at the origin (range 0).
+    """
+    rng = np.random.default_rng(seed)
+    pts = []
+    for r in range(rows):
+        n = int(per_ring * rng.uniform(0.8, 1.2))
+        az = np.linspace(0.1, 2 * np.pi - 0.1, n) + rng.normal(0, jitter, n)
+        el = np.radians(2.0 - 26.0 * r / max(rows - 1, 1)) + rng.normal(0, 1e-3, n)
+        d = rng.uniform(0.5, 80.0, n)
+        if origin:
+            d[rng.random(n) < 0.02] = 0.0
+        pts.append(np.stack([d * np.cos(el) * np.cos(az), d * np.cos(el) * np.sin(az),
+                             d * np.sin(el)], axis=1))  # fmt: skip
+    return np.concatenate(pts).astype(dtype)
+
+
+@settings(max_examples=100, deadline=None)
+@given(
+    seed=st.integers(0, 2**32 - 1),
+    rows=st.integers(1, 12),
+    per_ring=st.integers(1, 400),
+    jitter=st.sampled_from([0.0, 1e-3, 0.02, 1.0]),
+    origin=st.booleans(),
+    width=st.sampled_from([16, 97, 512, 2048]),
+    dtype=st.sampled_from([np.float32, np.float64]),
+    keep_share=st.sampled_from([None, 0.0, 0.5, 1.0]),
+    shuffle=st.booleans(),
+)
+def test_projection_equals_the_reference_on_random_scans(
+    seed, rows, per_ring, jitter, origin, width, dtype, keep_share, shuffle
+):
+    pts = synthetic_scan(seed, rows, per_ring, jitter, dtype, origin)
+    rng = np.random.default_rng(seed + 1)
+    if shuffle:  # breaks the scan order: both must fall back to the spherical projection
+        pts = pts[rng.permutation(len(pts))]
+    keep = None if keep_share is None else rng.random(len(pts)) < keep_share
+    for mode in ("rings", "spherical"):
+        assert_same_projection(pts, width=width, rows=rows, mode=mode, keep=keep)
+    for min_points in (0, 1, per_ring // 2):
+        np.testing.assert_array_equal(
+            recover_rings(pts, rows, min_points), reference_recover_rings(pts, rows, min_points)
+        )
+
+
+def test_projection_of_an_empty_scan_and_a_bad_keep_mask():
+    with pytest.warns(UserWarning, match="spherical"):
+        img = project_points(np.zeros((0, 3), dtype=np.float32))
+    assert img.point_pixel.size == 0 and not img.ranges.any()
+    pts = synthetic_scan(0, 4, 300, 0.0, np.float32)
+    with pytest.raises(ValueError, match="keep"):
+        project_points(pts, rows=4, keep=np.ones(3, dtype=bool))
+
+
+def test_point_counts_without_a_stored_count():
+    pts = synthetic_scan(3, 4, 300, 0.0, np.float32)
+    img = project_points(pts, rows=4, width=64, mode="spherical")
+    bare = type(img)(img.ranges, img.elevation, img.point_pixel, img.projection)
+    assert bare.counts is None
+    np.testing.assert_array_equal(bare.point_counts(), img.counts)
+    assert img.counts.sum() == np.count_nonzero(img.point_pixel >= 0)
+
+
+@settings(max_examples=50, deadline=None)
+@given(
+    seed=st.integers(0, 2**32 - 1),
+    height=st.integers(1, 16),
+    width=st.integers(1, 900),
+    empty_share=st.sampled_from([0.0, 0.3, 1.0]),
+)
+def test_sensor_image_points_equal_to_points(seed, height, width, empty_share):
+    rng = np.random.default_rng(seed)
+    ranges = rng.uniform(0.5, 120.0, (height, width)).astype(np.float32)
+    ranges[rng.random((height, width)) < empty_share] = 0.0
+    elevation = np.sort(rng.uniform(-0.5, 0.1, height))[::-1]
+    img = from_sensor_image(ranges, elevation)
+    np.testing.assert_array_equal(img.pixel_points(), img.to_points()[img.point_pixel])
+    np.testing.assert_array_equal(img.point_pixel, np.flatnonzero(ranges > 0))
+    again, points = from_sensor_image_with_points(ranges, elevation)
+    np.testing.assert_array_equal(points, img.to_points()[img.point_pixel])
+    np.testing.assert_array_equal(again.point_pixel, img.point_pixel)
+    np.testing.assert_array_equal(again.counts, img.counts)
+    some = rng.integers(0, height * width, 50)
+    np.testing.assert_array_equal(img.pixel_points(some), img.to_points()[some])
+    np.testing.assert_array_equal(img.point_counts(), (ranges > 0).astype(np.int32))
+
+
+@settings(max_examples=200, deadline=None)
+@given(
+    seed=st.integers(0, 2**32 - 1),
+    lengths=st.lists(st.integers(0, 3000), min_size=1, max_size=6),
+    distinct=st.sampled_from([1, 2, 3, 40, 0]),  # 0: continuous values
+)
+def test_segment_medians_equal_np_median(seed, lengths, distinct):
+    from flic_cli.range_image import _segment_medians
+
+    rng = np.random.default_rng(seed)
+    n = sum(lengths)
+    values = rng.normal(size=n)
+    if distinct:  # many ties, also around the middle
+        values = rng.choice(rng.normal(size=distinct), n)
+    if rng.random() < 0.3:  # sorted runs, as elevations along a ring can be
+        values = np.sort(values)
+    counts = np.array(lengths, dtype=np.int64)
+    bounds = np.concatenate([[0], np.cumsum(counts)])
+    want = [
+        np.median(values[a:b]) if b > a else np.nan
+        for a, b in zip(bounds[:-1], bounds[1:], strict=True)
+    ]
+    got = _segment_medians(values.copy(), counts)
+    np.testing.assert_array_equal(got, want)

@@ -19,7 +19,7 @@ from flic_cli.errors import FlicInputError
 from flic_cli.io.atomic import atomic_write, atomic_write_bytes, read_bytes, read_text
 from flic_cli.io.base import Frame, FrameRef, select_sequences
 from flic_cli.io.semantickitti import frames_text, in_frames
-from flic_cli.range_image import RangeImage, from_sensor_image
+from flic_cli.range_image import RangeImage, from_sensor_image_with_points
 
 FORMAT = "moosmann"
 RANGE_SCALE = 500.0
@@ -173,8 +173,9 @@ def read_png_range(path: str | Path, cfg: ImgCfg) -> np.ndarray:
         When the file is missing, not a decodable PNG, not 16-bit greyscale or not of the size
         that ``img.cfg`` declares.
     """
-    pixels = _read_png16(path, (cfg.width, cfg.height), "img.cfg says")
-    return pixels.astype(np.float32) / np.float32(RANGE_SCALE)
+    ranges = _read_png16(path, (cfg.width, cfg.height), "img.cfg says").astype(np.float32)
+    ranges /= np.float32(RANGE_SCALE)
+    return ranges
 
 
 def write_png_range(path: str | Path, ranges_m: np.ndarray) -> None:
@@ -449,6 +450,7 @@ class MoosmannDataset:
         ``points[i]`` is the point of pixel ``image.point_pixel[i]`` (row-major pixel order).
         """
         cfg = self._cfg[ref.sequence]
-        image = from_sensor_image(read_png_range(ref.path, cfg), cfg.elevation())
-        points = image.to_points()[image.point_pixel]
+        image, points = from_sensor_image_with_points(
+            read_png_range(ref.path, cfg), cfg.elevation()
+        )
         return Frame(ref, points, None, image)

@@ -9,14 +9,16 @@ class (0 = unlabeled unless semantics are given) in the lower 16 bits, in
 
 from __future__ import annotations
 
+import os
 import warnings
 from pathlib import Path
 from typing import NamedTuple
 
 import numpy as np
+from numba import njit
 
 from flic_cli.errors import FlicInputError
-from flic_cli.io.atomic import atomic_write_bytes, read_bytes, read_text
+from flic_cli.io.atomic import atomic_write_bytes, read_text
 from flic_cli.io.base import Frame, FrameRef, select_sequences
 from flic_cli.range_image import RangeImage
 
@@ -46,6 +48,43 @@ class Scan(NamedTuple):
 # ---------------------------------------------------------------------------------------------
 
 
+def _read_array(path: str | Path, dtype: str, record: int, what: str) -> np.ndarray:
+    """The content of a binary file as a 1-D array of ``dtype``, read straight into it.
+
+    Parameters
+    ----------
+    path : the file.
+    dtype : little-endian element type (``"<f4"``, ``"<u4"``).
+    record : bytes per record; the file size must be a multiple of it.
+    what : the record layout, for the error message.
+
+    Raises
+    ------
+    FlicInputError
+        When the file is missing or unreadable, or its size is not a multiple of ``record``.
+    """
+    try:
+        with open(path, "rb", buffering=0) as f:
+            size = os.fstat(f.fileno()).st_size
+            if size % record:
+                raise FlicInputError(
+                    path, f"size {size} bytes is not a multiple of {record} ({what})"
+                )
+            out = np.empty(size // np.dtype(dtype).itemsize, dtype=dtype)
+            view = memoryview(out).cast("B")
+            got = 0
+            while got < size:
+                n = f.readinto(view[got:])
+                if not n:
+                    raise FlicInputError(path, f"ended after {got} of {size} bytes while read")
+                got += n
+    except FileNotFoundError:
+        raise FlicInputError(path, "does not exist") from None
+    except OSError as exc:
+        raise FlicInputError(path, f"cannot be read ({exc.strerror})") from None
+    return out if out.dtype.isnative else out.astype(out.dtype.newbyteorder("="))
+
+
 def read_bin(path: str | Path) -> np.ndarray:
     """Read a ``.bin`` scan as stored, without dropping anything.
 
@@ -62,14 +101,10 @@ def read_bin(path: str | Path) -> np.ndarray:
     FlicInputError
         When the file is missing, its size is not a multiple of 16 bytes or it holds no points.
     """
-    data = read_bytes(path)
-    if len(data) % 16:
-        raise FlicInputError(
-            path, f"size {len(data)} bytes is not a multiple of 16 (x, y, z, remission float32)"
-        )
-    if not data:
+    data = _read_array(path, "<f4", 16, "x, y, z, remission float32")
+    if not data.size:
         raise FlicInputError(path, "is empty (0 points)")
-    return np.frombuffer(data, dtype="<f4").reshape(-1, 4).astype(np.float32)
+    return data.reshape(-1, 4)
 
 
 def read_label(path: str | Path, n_points: int | None = None) -> np.ndarray:
@@ -90,15 +125,30 @@ def read_label(path: str | Path, n_points: int | None = None) -> np.ndarray:
         When the file is missing, its size is not a multiple of 4 bytes or the count differs from
         ``n_points``.
     """
-    data = read_bytes(path)
-    if len(data) % 4:
-        raise FlicInputError(
-            path, f"size {len(data)} bytes is not a multiple of 4 (one uint32 label per point)"
-        )
-    labels = np.frombuffer(data, dtype="<u4").astype(np.uint32)
+    labels = _read_array(path, "<u4", 4, "one uint32 label per point")
     if n_points is not None and labels.size != n_points:
         raise FlicInputError(path, f"holds {labels.size} labels but the scan has {n_points} points")
     return labels
+
+
+@njit(cache=True)
+def _split_scan(flat: np.ndarray) -> tuple[np.ndarray, np.ndarray, int]:
+    """x, y, z as an (N, 3) array and the remission of ``(4N,)`` stored values, and the number of
+    points with a NaN or infinite coordinate (``v - v`` is 0 exactly when ``v`` is finite)."""
+    n = flat.size // 4
+    xyz = np.empty(3 * n, dtype=flat.dtype)
+    remission = np.empty(n, dtype=flat.dtype)
+    bad = 0
+    for i in range(n):
+        x = flat[4 * i]
+        y = flat[4 * i + 1]
+        z = flat[4 * i + 2]
+        xyz[3 * i] = x
+        xyz[3 * i + 1] = y
+        xyz[3 * i + 2] = z
+        remission[i] = flat[4 * i + 3]
+        bad += ((x - x) != 0) | ((y - y) != 0) | ((z - z) != 0)
+    return xyz.reshape(n, 3), remission, bad
 
 
 def read_scan(bin_path: str | Path, label_path: str | Path | None = None) -> Scan:
@@ -125,24 +175,17 @@ def read_scan(bin_path: str | Path, label_path: str | Path | None = None) -> Sca
     """
     raw = read_bin(bin_path)
     labels = None if label_path is None else read_label(label_path, raw.shape[0])
-    keep = np.isfinite(raw[:, :3]).all(axis=1)
-    n_bad = raw.shape[0] - int(keep.sum())
+    points, remission, n_bad = _split_scan(raw.reshape(-1))
+    if n_bad == 0:  # the usual case: one pass, no mask
+        return Scan(points, remission, labels, None)
     if n_bad == raw.shape[0]:
         raise FlicInputError(bin_path, f"none of its {n_bad} points has finite coordinates")
-    if n_bad:
-        warnings.warn(
-            f"{bin_path}: dropped {n_bad} of {raw.shape[0]} points with NaN or infinite "
-            "coordinates",
-            stacklevel=2,
-        )
-        raw = raw[keep]
-        labels = None if labels is None else labels[keep]
-    return Scan(
-        np.ascontiguousarray(raw[:, :3]),
-        np.ascontiguousarray(raw[:, 3]),
-        labels,
-        None if n_bad == 0 else keep,
+    warnings.warn(
+        f"{bin_path}: dropped {n_bad} of {raw.shape[0]} points with NaN or infinite coordinates",
+        stacklevel=2,
     )
+    keep = np.isfinite(points).all(axis=1)
+    return Scan(points[keep], remission[keep], None if labels is None else labels[keep], keep)
 
 
 def semantic(labels: np.ndarray) -> np.ndarray:

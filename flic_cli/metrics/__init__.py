@@ -14,6 +14,7 @@ from flic_cli.metrics.instances import (
     ObjectMatches,
     distance_band,
     match_objects,
+    score_frame,
     segmentation_stats,
     summarize,
 )
@@ -26,6 +27,7 @@ __all__ = [
     "ObjectMatches",
     "distance_band",
     "match_objects",
+    "score_frame",
     "segmentation_stats",
     "summarize",
 ]

@@ -39,11 +39,11 @@ average per-frame means). ``P_x`` is the share of objects with ``IoU >= x`` and 
 from __future__ import annotations
 
 from dataclasses import dataclass, fields
-from typing import NamedTuple
 
 import numpy as np
+from numba import njit
 
-from flic_cli.classes import thing_mask as _thing_mask
+from flic_cli.classes import THING_LUT
 
 __all__ = [
     "DISTANCE_BANDS",
@@ -53,6 +53,7 @@ __all__ = [
     "ObjectMatches",
     "distance_band",
     "match_objects",
+    "score_frame",
     "segmentation_stats",
     "summarize",
 ]
@@ -132,20 +133,6 @@ class ObjectMatches:
         return {f.name: getattr(self, f.name) for f in fields(self)}
 
 
-class _Contingency(NamedTuple):
-    """Sparse object x cluster contingency table of one frame (internal)."""
-
-    obj_labels: np.ndarray  # (M,) uint32, sorted
-    obj_sizes: np.ndarray  # (M,) int64
-    cluster_ids: np.ndarray  # (C,) int64, sorted, all > 0
-    cluster_sizes: np.ndarray  # (C,) int64, over the whole evaluated point set
-    pair_obj: np.ndarray  # (P,) int64 object index, sorted (object-major)
-    pair_cluster: np.ndarray  # (P,) int64 cluster index
-    pair_overlap: np.ndarray  # (P,) int64 shared points, all > 0
-    thing_mask: np.ndarray  # (N,) bool: point of a thing class with an instance id
-    thing_obj: np.ndarray  # (T,) int64 object index of each thing point, -1 if ignored
-
-
 def _as_labels(labels: np.ndarray) -> np.ndarray:
     labels = np.asarray(labels)
     if labels.ndim != 1 or not np.issubdtype(labels.dtype, np.integer):
@@ -161,84 +148,260 @@ def _as_pred(pred: np.ndarray, n: int) -> np.ndarray:
         raise ValueError(
             f"pred must be a 1-D integer array of length {n}, got {pred.dtype} {pred.shape}"
         )
-    return pred.astype(np.int64, copy=False)
+    if pred.dtype in (np.int32, np.int64):
+        return pred
+    return pred.astype(np.int64)
 
 
-def _compact(values: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """``np.unique(values, return_inverse=True, return_counts=True)`` for int64 values.
+@njit(cache=True)
+def _scan_frame(
+    gt: np.ndarray, pred: np.ndarray, thing_lut: np.ndarray, n_ids: int
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """One pass over the points of a frame, one over its thing points.
 
-    Uses ``bincount`` when the value range is small compared to the array (the usual case for
-    cluster ids), which avoids sorting.
+    Returns
+    -------
+    sizes : (n_ids,) int64 points of every cluster id (``0 < id < n_ids``; ``sizes[0] = 0``)
+    labels : (D,) uint32 the distinct labels of the thing points (objects), in order of appearance
+    counts : (D,) int64 their numbers of points
+    index : (T,) int64 index of every point of a thing class with an instance id
+    slot : (T,) int64 its label's position in ``labels``
+    cluster : (T,) int64 its cluster id
     """
-    if values.size == 0:
-        empty = np.zeros(0, dtype=np.int64)
-        return empty, empty, empty
-    lo = int(values.min())
-    span = int(values.max()) - lo + 1
-    if span <= 4 * values.size + (1 << 16):
-        shifted = values - lo
-        counts = np.bincount(shifted, minlength=span)
-        present = np.flatnonzero(counts)
-        lut = np.empty(span, dtype=np.int64)
-        lut[present] = np.arange(present.size, dtype=np.int64)
-        return present + lo, lut[shifted], counts[present]
-    ids, inverse, counts = np.unique(values, return_inverse=True, return_counts=True)
-    return ids.astype(np.int64), inverse.reshape(-1).astype(np.int64), counts.astype(np.int64)
+    sizes = np.zeros(n_ids, dtype=np.int64)
+    n = gt.size
+    index = np.empty(n, dtype=np.int64)
+    thing_label = np.empty(n, dtype=np.uint32)
+    cluster = np.empty(n, dtype=np.int64)
+    t = 0
+    runs = 0  # runs of equal labels among the thing points: at least the distinct labels
+    last = np.uint32(0)  # never a thing label (no instance id)
+    for i in range(n):
+        p = pred[i]
+        if p > 0:
+            sizes[p] += 1
+        g = gt[i]
+        if g > 0xFFFF and thing_lut[g & 0xFFFF]:
+            runs += g != last
+            last = g
+            index[t] = i
+            thing_label[t] = g
+            cluster[t] = p
+            t += 1
+    # distinct labels: open addressing (linear probing), table at most half full
+    size = 64
+    while size < 2 * runs:
+        size *= 2
+    table = np.full(size, -1, dtype=np.int64)  # hash slot -> position in labels
+    labels = np.empty(runs, dtype=np.uint32)
+    counts = np.zeros(runs, dtype=np.int64)
+    slot = np.empty(t, dtype=np.int64)
+    n_labels = 0
+    last = np.uint32(0)
+    s = -1
+    for q in range(t):
+        g = thing_label[q]
+        if g != last:
+            k = np.int64((np.uint64(g) * np.uint64(0x9E3779B97F4A7C15)) >> np.uint64(40))
+            k &= size - 1
+            while table[k] >= 0 and labels[table[k]] != g:
+                k = (k + 1) & (size - 1)
+            if table[k] < 0:
+                table[k] = n_labels
+                labels[n_labels] = g
+                n_labels += 1
+            s = table[k]
+            last = g
+        counts[s] += 1
+        slot[q] = s
+    return sizes, labels[:n_labels], counts[:n_labels], index[:t], slot, cluster[:t]
 
 
-def _contingency(gt_labels: np.ndarray, pred: np.ndarray, min_points: int) -> _Contingency:
-    """Objects, clusters and their non-zero overlaps for one frame."""
+@njit(cache=True)
+def _pair_keys(obj: np.ndarray, cluster: np.ndarray, n_ids: int) -> np.ndarray:
+    """``object * n_ids + cluster id`` of every thing point of an evaluated object in a cluster."""
+    keys = np.empty(obj.size, dtype=np.int64)
+    m = 0
+    for t in range(obj.size):
+        if obj[t] >= 0 and cluster[t] > 0:
+            keys[m] = obj[t] * n_ids + cluster[t]
+            m += 1
+    return keys[:m]
+
+
+@njit(cache=True)
+def _centroid_sums(
+    points: np.ndarray, index: np.ndarray, obj: np.ndarray, n_obj: int
+) -> np.ndarray:
+    """(n_obj, 3) float64 sums of x, y, z over every object's points, added in point order
+    (as ``np.bincount(obj, weights=...)`` adds them)."""
+    sums = np.zeros((n_obj, 3), dtype=np.float64)
+    for t in range(index.size):
+        o = obj[t]
+        if o >= 0:
+            i = index[t]
+            for k in range(3):
+                sums[o, k] += np.float64(points[i, k])
+    return sums
+
+
+@njit(cache=True)
+def _match(
+    pair_obj: np.ndarray,
+    pair_cluster: np.ndarray,
+    pair_overlap: np.ndarray,
+    obj_sizes: np.ndarray,
+    sizes: np.ndarray,
+    min_fragment_points: int,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, int]:
+    """The matching rules of the module docstring over the non-zero overlaps of one frame.
+
+    The pairs are sorted by object, then cluster id. Returns per object the matched cluster id
+    (-1), overlap, IoU and fragment count, and the number of under-segmenting clusters.
+    """
+    n_obj = obj_sizes.size
+    cluster = np.full(n_obj, -1, dtype=np.int64)
+    overlap = np.zeros(n_obj, dtype=np.int64)
+    iou = np.zeros(n_obj, dtype=np.float64)
+    n_fragments = np.zeros(n_obj, dtype=np.int64)
+    # best cluster per object: largest overlap, then smaller cluster, then lower id (the pairs
+    # come in id order, so a full tie keeps the first)
+    best_c = np.full(n_obj, -1, dtype=np.int64)
+    best_ov = np.zeros(n_obj, dtype=np.int64)
+    best_iou = np.zeros(n_obj, dtype=np.float64)
+    for q in range(pair_obj.size):
+        o, c, ov = pair_obj[q], pair_cluster[q], pair_overlap[q]
+        if ov >= min_fragment_points:
+            n_fragments[o] += 1
+        if best_c[o] < 0 or ov > best_ov[o] or (ov == best_ov[o] and sizes[c] < sizes[best_c[o]]):
+            best_c[o] = c
+            best_ov[o] = ov
+            best_iou[o] = ov / (obj_sizes[o] + sizes[c] - ov)
+    # one cluster, one object: highest IoU, then larger overlap, then lower label value
+    cand = np.flatnonzero(best_c >= 0)
+    order = cand[np.argsort(best_c[cand], kind="mergesort")]
+    q = 0
+    while q < order.size:
+        c = best_c[order[q]]
+        win = order[q]
+        r = q + 1
+        while r < order.size and best_c[order[r]] == c:
+            o = order[r]
+            if best_iou[o] > best_iou[win] or (
+                best_iou[o] == best_iou[win]
+                and (best_ov[o] > best_ov[win] or (best_ov[o] == best_ov[win] and o < win))
+            ):
+                win = o
+            r += 1
+        cluster[win] = c
+        overlap[win] = best_ov[win]
+        iou[win] = best_iou[win]
+        q = r
+    # under-segmentation: clusters holding min_fragment_points of at least two objects
+    touching = pair_cluster[pair_overlap >= min_fragment_points]
+    touching = np.sort(touching)
+    under = 0
+    q = 0
+    while q < touching.size:
+        r = q + 1
+        while r < touching.size and touching[r] == touching[q]:
+            r += 1
+        if r - q >= 2:
+            under += 1
+        q = r
+    return cluster, overlap, iou, n_fragments, under
+
+
+def score_frame(
+    gt_labels: np.ndarray,
+    pred: np.ndarray,
+    points: np.ndarray | None = None,
+    min_points: int = MIN_OBJECT_POINTS,
+    min_fragment_points: int = MIN_FRAGMENT_POINTS,
+) -> tuple[ObjectMatches, dict[str, int]]:
+    """:func:`match_objects` and :func:`segmentation_stats` of one frame in one go.
+
+    Both come from the same object x cluster overlaps, which are counted once; the results are
+    exactly those of the two functions (which call this one).
+
+    Parameters
+    ----------
+    gt_labels, pred, points, min_points, min_fragment_points
+        As for :func:`match_objects`.
+
+    Returns
+    -------
+    (ObjectMatches, dict of str to int)
+        The object matches and the segmentation statistics.
+
+    Raises
+    ------
+    ValueError
+        As :func:`match_objects`.
+    """
     gt = _as_labels(gt_labels)
-    p = _as_pred(pred, gt.shape[0])
-    n = gt.shape[0]
+    n_pts = gt.shape[0]
+    p = _as_pred(pred, n_pts)
+    if points is not None:
+        pts = np.asarray(points)
+        if pts.ndim != 2 or pts.shape[0] != n_pts or pts.shape[1] < 3:
+            raise ValueError(f"points must have shape ({n_pts}, 3), got {pts.shape}")
 
-    clustered = p > 0
-    cluster_ids, cluster_inv, cluster_sizes = _compact(p[clustered])
-    point_cluster = np.full(n, -1, dtype=np.int64)
-    point_cluster[clustered] = cluster_inv
-
-    thing_mask = _thing_mask(gt)
-    thing_labels = gt[thing_mask]
-    all_labels, label_inv, label_counts = np.unique(
-        thing_labels, return_inverse=True, return_counts=True
-    )
-    keep = label_counts >= min_points
-    remap = np.where(keep, np.cumsum(keep) - 1, -1)
-    thing_obj = remap[label_inv.reshape(-1)]
-    obj_labels = all_labels[keep]
-    obj_sizes = label_counts[keep].astype(np.int64)
-
-    thing_cluster = point_cluster[thing_mask]
-    hit = (thing_obj >= 0) & (thing_cluster >= 0)
-    n_clusters = cluster_ids.size
-    key = thing_obj[hit] * n_clusters + thing_cluster[hit]
-    n_keys = obj_labels.size * n_clusters
-    if key.size == 0:
-        key_ids = counts = np.zeros(0, dtype=np.int64)
-    elif n_keys <= 4 * key.size + (1 << 16):
-        dense = np.bincount(key, minlength=n_keys)
-        key_ids = np.flatnonzero(dense)
-        counts = dense[key_ids]
-    else:
-        key_ids, counts = np.unique(key, return_counts=True)
-    return _Contingency(
-        obj_labels=obj_labels,
-        obj_sizes=obj_sizes,
-        cluster_ids=cluster_ids,
-        cluster_sizes=cluster_sizes.astype(np.int64),
-        pair_obj=(key_ids // max(n_clusters, 1)).astype(np.int64),
-        pair_cluster=(key_ids % max(n_clusters, 1)).astype(np.int64),
-        pair_overlap=counts.astype(np.int64),
-        thing_mask=thing_mask,
-        thing_obj=thing_obj,
+    # cluster ids as dense indices; far-apart ids (rare) are renumbered in id order first
+    cluster_ids = None
+    top = int(p.max()) if n_pts else 0
+    if top >= 4 * n_pts + (1 << 16):
+        clustered = p > 0
+        cluster_ids, inverse = np.unique(p[clustered], return_inverse=True)
+        p = np.zeros(n_pts, dtype=np.int64)
+        p[clustered] = inverse.reshape(-1) + 1
+        top = cluster_ids.size
+    n_ids = max(top, 0) + 1
+    sizes, labels, label_counts, thing_index, thing_slot, thing_cluster = _scan_frame(
+        gt, p, THING_LUT, n_ids
     )
 
+    # objects: thing labels with at least min_points points, in label order
+    order = np.argsort(labels)
+    keep = label_counts[order] >= min_points
+    obj_labels = labels[order][keep]
+    obj_sizes = label_counts[order][keep]
+    n_obj = obj_labels.size
+    slot_obj = np.empty(labels.size, dtype=np.int64)
+    slot_obj[order] = np.where(keep, np.cumsum(keep) - 1, -1)
+    thing_obj = slot_obj[thing_slot]
 
-def _group_firsts(sorted_groups: np.ndarray) -> np.ndarray:
-    """Boolean mask of the first element of each run in a sorted array."""
-    first = np.ones(sorted_groups.size, dtype=bool)
-    first[1:] = sorted_groups[1:] != sorted_groups[:-1]
-    return first
+    keys, pair_overlap = np.unique(_pair_keys(thing_obj, thing_cluster, n_ids), return_counts=True)
+    pair_obj, pair_cluster = keys // n_ids, keys % n_ids
+    cluster, overlap, iou, n_fragments, under = _match(
+        pair_obj, pair_cluster, pair_overlap.astype(np.int64), obj_sizes, sizes, min_fragment_points
+    )
+    if cluster_ids is not None:
+        cluster = np.where(cluster > 0, cluster_ids[np.maximum(cluster - 1, 0)], -1)
+
+    distance = np.full(n_obj, np.nan, dtype=np.float64)
+    if points is not None and n_obj:
+        centroid = _centroid_sums(pts, thing_index, thing_obj, n_obj) / obj_sizes[:, None]
+        distance = np.sqrt(np.einsum("ij,ij->i", centroid, centroid))
+
+    matches = ObjectMatches(
+        label=obj_labels.astype(np.uint32),
+        semantic=(obj_labels & 0xFFFF).astype(np.int64),
+        instance=(obj_labels >> 16).astype(np.int64),
+        n_points=obj_sizes,
+        distance=distance,
+        cluster=cluster,
+        overlap=overlap,
+        iou=iou,
+        n_fragments=n_fragments,
+    )
+    stats = {
+        "clusters": int(np.count_nonzero(sizes)),
+        "objects": int(n_obj),
+        "over_segmented": int(np.count_nonzero(n_fragments >= 2)),
+        "under_segmented": int(under),
+    }
+    return matches, stats
 
 
 def match_objects(
@@ -251,6 +414,7 @@ def match_objects(
     """Match every ground-truth object of one frame to its best predicted cluster.
 
     The rules (best overlap, IoU, one cluster one object, ties) are in the module docstring.
+    :func:`score_frame` gives this and :func:`segmentation_stats` in one go.
 
     Parameters
     ----------
@@ -277,60 +441,7 @@ def match_objects(
         If the arrays are not 1-D integer arrays of equal length, or ``points`` has the wrong
         shape.
     """
-    table = _contingency(gt_labels, pred, min_points)
-    n_obj = table.obj_labels.size
-    n_pts = table.thing_mask.shape[0]
-
-    p_obj, p_clu, p_ov = table.pair_obj, table.pair_cluster, table.pair_overlap
-    p_size = table.cluster_sizes[p_clu]
-    p_iou = p_ov / (table.obj_sizes[p_obj] + p_size - p_ov)
-
-    # Best cluster per object: largest overlap, then smaller cluster, then lower cluster id.
-    order = np.lexsort((p_clu, p_size, -p_ov, p_obj))
-    best = order[_group_firsts(p_obj[order])]
-    cand_obj, cand_clu, cand_ov, cand_iou = p_obj[best], p_clu[best], p_ov[best], p_iou[best]
-
-    # One cluster, one object: highest IoU, then larger overlap, then lower label value.
-    order = np.lexsort((cand_obj, -cand_ov, -cand_iou, cand_clu))
-    winners = order[_group_firsts(cand_clu[order])]
-
-    cluster = np.full(n_obj, -1, dtype=np.int64)
-    overlap = np.zeros(n_obj, dtype=np.int64)
-    iou = np.zeros(n_obj, dtype=np.float64)
-    won = cand_obj[winners]
-    cluster[won] = table.cluster_ids[cand_clu[winners]]
-    overlap[won] = cand_ov[winners]
-    iou[won] = cand_iou[winners]
-
-    n_fragments = np.bincount(p_obj[p_ov >= min_fragment_points], minlength=n_obj)
-
-    distance = np.full(n_obj, np.nan, dtype=np.float64)
-    if points is not None:
-        pts = np.asarray(points)
-        if pts.ndim != 2 or pts.shape[0] != n_pts or pts.shape[1] < 3:
-            raise ValueError(f"points must have shape ({n_pts}, 3), got {pts.shape}")
-        if n_obj:
-            sel = table.thing_obj >= 0
-            obj_pts = pts[table.thing_mask][sel, :3].astype(np.float64, copy=False)
-            idx = table.thing_obj[sel]
-            sums = np.stack(
-                [np.bincount(idx, weights=obj_pts[:, k], minlength=n_obj) for k in range(3)],
-                axis=1,
-            )
-            centroid = sums / table.obj_sizes[:, None]
-            distance = np.sqrt(np.einsum("ij,ij->i", centroid, centroid))
-
-    return ObjectMatches(
-        label=table.obj_labels.astype(np.uint32),
-        semantic=(table.obj_labels & 0xFFFF).astype(np.int64),
-        instance=(table.obj_labels >> 16).astype(np.int64),
-        n_points=table.obj_sizes,
-        distance=distance,
-        cluster=cluster,
-        overlap=overlap,
-        iou=iou,
-        n_fragments=n_fragments.astype(np.int64),
-    )
+    return score_frame(gt_labels, pred, points, min_points, min_fragment_points)[0]
 
 
 def segmentation_stats(
@@ -365,16 +476,7 @@ def segmentation_stats(
         ``clusters`` (distinct cluster ids > 0), ``objects`` (evaluated objects),
         ``over_segmented`` (objects), ``under_segmented`` (clusters).
     """
-    table = _contingency(gt_labels, pred, min_points)
-    touching = table.pair_overlap >= min_fragment_points
-    per_obj = np.bincount(table.pair_obj[touching], minlength=table.obj_labels.size)
-    per_clu = np.bincount(table.pair_cluster[touching], minlength=table.cluster_ids.size)
-    return {
-        "clusters": int(table.cluster_ids.size),
-        "objects": int(table.obj_labels.size),
-        "over_segmented": int(np.count_nonzero(per_obj >= 2)),
-        "under_segmented": int(np.count_nonzero(per_clu >= 2)),
-    }
+    return score_frame(gt_labels, pred, None, min_points, min_fragment_points)[1]
 
 
 def _p_key(x: float) -> str:
