@@ -288,8 +288,7 @@ def test_unit_weights_count_pixels(image, threshold, min_size):
     )
 
 
-def test_pixel_point_counts_of_a_projection_and_of_a_sensor_image():
-    from flic_cli.methods import pixel_point_counts
+def test_point_counts_of_a_projection_and_of_a_sensor_image():
     from flic_cli.range_image import from_sensor_image, project_points
 
     # three points in one pixel (same direction, 5.0 / 5.1 / 5.2 m), one alone, 64 rings faked
@@ -297,14 +296,14 @@ def test_pixel_point_counts_of_a_projection_and_of_a_sensor_image():
     d = np.array([[1.0, 0.0, 0.0]] * 3 + [[0.0, 1.0, 0.0]])
     pts = d * np.array([5.0, 5.1, 5.2, 7.0])[:, None]
     img = project_points(pts, width=16, mode="spherical", rows=4, fov_up_deg=5, fov_down_deg=-5)
-    counts = pixel_point_counts(img)
+    counts = img.point_counts()
     assert counts.sum() == 4 and sorted(counts[counts > 0].tolist()) == [1, 3]
     assert counts.reshape(-1)[img.point_pixel[0]] == 3
     np.testing.assert_array_equal(counts > 0, img.ranges > 0)
     ranges = np.zeros((2, 5), np.float32)
     ranges[0, 1] = ranges[1, 4] = 3.0
     native = from_sensor_image(ranges, np.zeros(2))
-    np.testing.assert_array_equal(pixel_point_counts(native), (ranges > 0).astype(np.int32))
+    np.testing.assert_array_equal(native.point_counts(), (ranges > 0).astype(np.int32))
 
 
 def test_min_size_counts_points_not_pixels():

@@ -319,3 +319,23 @@ def test_agnostic_counts_ignore_negative_ids_and_count_large_clusters_as_fp() ->
     assert (s["tp"], s["fp"], s["fn"], s["pq"]) == (0, 1, 1, 0.0)
     with pytest.raises(ValueError, match="1 class"):
         agnostic_scores(panoptic_counts(gt, gt))
+
+
+@settings(max_examples=300, deadline=None)
+@given(data=st.data())
+def test_fast_agnostic_counts_equal_the_definition(data) -> None:
+    """agnostic_panoptic_counts (direct) equals the general segment_counts reference."""
+    from flic_cli.metrics.panoptic import agnostic_panoptic_counts_reference
+
+    n = data.draw(st.integers(1, 400))
+    classes = [0, 1, 10, 30, 40, 50, 52, 252, 254]  # unlabeled, outlier, things, stuff, ignored
+    sem = np.array(data.draw(st.lists(st.sampled_from(classes), min_size=n, max_size=n)))
+    inst = np.array(data.draw(st.lists(st.integers(0, 4), min_size=n, max_size=n)))
+    gt = ((inst << 16) | sem).astype(np.uint32)
+    pred = np.array(data.draw(st.lists(st.integers(-1, 6), min_size=n, max_size=n)))
+    min_points = data.draw(st.integers(1, 30))
+    fast = agnostic_panoptic_counts(gt, pred, min_points)
+    ref = agnostic_panoptic_counts_reference(gt, pred, min_points)
+    for name in ("tp", "fp", "fn", "sem_tp", "sem_fp", "sem_fn"):
+        np.testing.assert_array_equal(getattr(fast, name), getattr(ref, name), err_msg=name)
+    np.testing.assert_allclose(fast.iou_sum, ref.iou_sum, rtol=1e-12)

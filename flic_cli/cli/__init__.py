@@ -23,6 +23,9 @@ def main(argv: list[str] | None = None) -> None:
     minimum) in a multi-line box; here they become ``error: <what is wrong> (see flic CMD
     --help)`` and exit code 2, like every other bad input.
     """
+    from flic_cli.runs.environment import keep_freed_memory
+
+    keep_freed_memory()  # every frame reuses the same buffers (see its docstring)
     command = typer.main.get_command(app)
     click = _click_exceptions(command)
     ClickException = click.ClickException  # noqa: N806

@@ -2,7 +2,7 @@
 (see :class:`flic_cli.methods.base.Method` and :mod:`flic_cli.config.component`), named in
 :data:`flic_cli.registry.METHODS` under the ``kind`` that config files use."""
 
-from flic_cli.methods.base import Method, drop_small, pixel_point_counts
+from flic_cli.methods.base import Method, drop_small
 from flic_cli.methods.bogoslavskyi import Bogoslavskyi, bogoslavskyi_labels
 from flic_cli.methods.bridge import Bridge, bridge_labels
 from flic_cli.methods.dbscan import Dbscan, dbscan_labels
@@ -24,5 +24,4 @@ __all__ = [
     "dbscan_labels",
     "drop_small",
     "flic_labels",
-    "pixel_point_counts",
 ]

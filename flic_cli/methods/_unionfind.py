@@ -76,7 +76,7 @@ def connect_labels(
     criterion : DISTANCE or ANGLE.
     param : t^2 (m^2) for DISTANCE, tan(theta) for ANGLE.
     min_size : components whose ``weights`` sum to less are dropped (label 0).
-    weights : (H, W) int32, points per pixel (see :func:`flic_cli.methods.base.pixel_point_counts`);
+    weights : (H, W) int32, points per pixel (:meth:`flic_cli.range_image.RangeImage.point_counts`);
         all ones = count pixels.
 
     Returns

@@ -26,30 +26,6 @@ class Method(Protocol):
     ) -> np.ndarray: ...
 
 
-def pixel_point_counts(image: RangeImage) -> np.ndarray:
-    """Points of the evaluated set in every pixel: the weights of the minimum cluster size.
-
-    Several points can share a pixel (the nearest defines the range, all of them receive the
-    pixel's cluster id), so a cluster's size in points is the sum of its pixels' counts. For a
-    sensor's own image (Moosmann) every valid pixel is one point.
-
-    Parameters
-    ----------
-    image : the range image; ``image.point_pixel`` maps points to flat pixels (-1 = none).
-
-    Returns
-    -------
-    (H, W) int32, points per pixel (0 for pixels without a measurement).
-    """
-    h, w = image.shape
-    if image.projection == "native":
-        return (image.ranges > 0).astype(np.int32)
-    pix = np.asarray(image.point_pixel)
-    if image.projection == "spherical":
-        pix = pix[pix >= 0]
-    return np.bincount(pix, minlength=h * w).astype(np.int32).reshape(h, w)
-
-
 def pixel_weights(weights: np.ndarray | None, shape: tuple[int, int]) -> np.ndarray:
     """``weights`` as the contiguous (H, W) int32 array the kernels take (None: 1 per pixel)."""
     if weights is None:
@@ -68,7 +44,7 @@ def drop_small(labels: np.ndarray, min_size: int, weights: np.ndarray | None = N
     labels : (N,) int array, values < 1 mean "no cluster".
     min_size : smallest cluster kept, in points (sum of ``weights``).
     weights : (N,) int array, points each entry stands for (e.g. a pixel's
-        :func:`pixel_point_counts`); default 1 each.
+        :meth:`flic_cli.range_image.RangeImage.point_counts`); default 1 each.
     """
     labels = np.asarray(labels)
     out = np.zeros(labels.shape, dtype=np.int32)

@@ -10,7 +10,7 @@ from pydantic.dataclasses import dataclass
 
 from flic_cli.config.component import STRICT
 from flic_cli.methods._unionfind import ANGLE, connect_labels
-from flic_cli.methods.base import pixel_point_counts, pixel_weights
+from flic_cli.methods.base import pixel_weights
 from flic_cli.methods.flic import connection_sets
 from flic_cli.range_image import RangeImage
 
@@ -90,6 +90,6 @@ class Bogoslavskyi:
             self.angle_deg,
             self.min_size,
             mask,
-            pixel_point_counts(image),
+            image.point_counts(),
         )
         return image.point_labels(labels)

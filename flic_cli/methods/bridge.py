@@ -56,7 +56,7 @@ from pydantic.dataclasses import dataclass
 
 from flic_cli.config.component import STRICT
 from flic_cli.methods._unionfind import _find, number_components
-from flic_cli.methods.base import pixel_point_counts, pixel_weights
+from flic_cli.methods.base import pixel_weights
 from flic_cli.range_image import RangeImage
 
 #: Walk directions (row step, column step): left, up, up-left, up-right (the order of the tables
@@ -350,6 +350,6 @@ class Bridge:
             self.reach_px,
             self.min_size,
             mask,
-            pixel_point_counts(image),
+            image.point_counts(),
         )
         return image.point_labels(labels)

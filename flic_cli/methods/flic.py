@@ -10,7 +10,7 @@ from pydantic.dataclasses import dataclass
 
 from flic_cli.config.component import STRICT
 from flic_cli.methods._unionfind import DISTANCE, connect_labels
-from flic_cli.methods.base import pixel_point_counts, pixel_weights
+from flic_cli.methods.base import pixel_weights
 from flic_cli.range_image import RangeImage
 
 MC_MODES = ("map", "neighbour")
@@ -169,7 +169,7 @@ def flic_labels(
     maps : Map Connection steps, see :func:`connection_sets`.
     mc_mode : ``"map"`` or ``"neighbour"``.
     mask : (H, W) bool, pixels to cluster (default: all valid pixels).
-    weights : (H, W) int, points per pixel (:func:`flic_cli.methods.base.pixel_point_counts`);
+    weights : (H, W) int, points per pixel (:meth:`flic_cli.range_image.RangeImage.point_counts`);
         default 1 per pixel (the minimum size then counts pixels).
 
     Returns
@@ -243,6 +243,6 @@ class Flic:
             self.maps,
             self.mc_mode,
             mask,
-            pixel_point_counts(image),
+            image.point_counts(),
         )
         return image.point_labels(labels)

@@ -80,12 +80,15 @@ from collections.abc import Iterable
 from dataclasses import dataclass, fields
 
 import numpy as np
+from numba import njit
 
 from flic_cli.classes import (
     LEARNING_IGNORE,
+    LEARNING_LUT,
     LEARNING_NAMES,
     LEARNING_STUFF,
     LEARNING_THINGS,
+    THING_LUT,
     learning_class,
     thing_mask,
 )
@@ -338,6 +341,75 @@ def agnostic_panoptic_counts(
         One entry: the thing class. ``sem_*`` count thing points (ground-truth object points
         against clustered points).
     """
+    gt = _check("gt_labels", gt_labels).astype(np.uint32, copy=False)
+    p = _check("pred", pred, gt.shape[0]).astype(np.int64, copy=False)
+    # :func:`segment_counts` with classes 1 (thing object / clustered), 2 (other) and 0 (ignored)
+    # gives the same counts (see :func:`agnostic_panoptic_counts_reference`); done here directly,
+    # on the few thing points, it is several times faster (it runs for every method and frame).
+    p_area, t_label, t_cluster, n_clustered = _agnostic_pass(
+        gt, p, LEARNING_LUT != 0, THING_LUT, int(p.max(initial=0)) + 1
+    )
+    labels, g_inv, g_area = np.unique(t_label, return_inverse=True, return_counts=True)
+    hit = t_cluster > 0
+    n_ids = p_area.size
+    keys, inter = np.unique(g_inv.reshape(-1)[hit] * n_ids + t_cluster[hit], return_counts=True)
+    gi, pi = keys // n_ids, keys % n_ids
+    iou = inter / (g_area[gi] + p_area[pi] - inter).astype(np.float64)
+    match = iou > IOU_MATCH
+    g_matched = np.zeros(labels.size, dtype=bool)
+    g_matched[gi[match]] = True
+    p_matched = np.zeros(n_ids, dtype=bool)
+    p_matched[pi[match]] = True
+    sem_tp = int(np.count_nonzero(hit))
+    counts = [
+        np.count_nonzero(match),
+        np.count_nonzero(~p_matched & (p_area >= max(min_points, 1))),  # id 0: no segment
+        np.count_nonzero(~g_matched & (g_area >= min_points)),
+        np.sum(iou[match]),
+        sem_tp,
+        n_clustered - sem_tp,
+        t_label.size - sem_tp,
+    ]
+    return PanopticCounts(
+        *(np.array([v], dtype=np.float64 if k == 3 else np.int64) for k, v in enumerate(counts))
+    )
+
+
+@njit(cache=True)
+def _agnostic_pass(
+    gt: np.ndarray, p: np.ndarray, evaluated: np.ndarray, thing: np.ndarray, n_ids: int
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
+    """One pass over the points: predicted segment areas (clustered points whose ground truth is
+    evaluated, by cluster id), the labels and cluster ids of the thing-object points, and the
+    number of clustered evaluated points."""
+    area = np.zeros(n_ids, dtype=np.int64)
+    n_thing = 0
+    for i in range(gt.size):
+        if thing[gt[i] & 0xFFFF] and gt[i] > 0xFFFF:
+            n_thing += 1
+    t_label = np.empty(n_thing, dtype=np.uint32)
+    t_cluster = np.empty(n_thing, dtype=np.int64)
+    k = 0
+    n_clustered = 0
+    for i in range(gt.size):
+        g = gt[i]
+        c = p[i]
+        if c > 0 and evaluated[g & 0xFFFF]:
+            area[c] += 1
+            n_clustered += 1
+        if thing[g & 0xFFFF] and g > 0xFFFF:
+            t_label[k] = g
+            t_cluster[k] = c
+            k += 1
+    return area, t_label, t_cluster, n_clustered
+
+
+def agnostic_panoptic_counts_reference(
+    gt_labels: np.ndarray, pred: np.ndarray, min_points: int = MIN_INSTANCE_POINTS
+) -> PanopticCounts:
+    """:func:`agnostic_panoptic_counts` through the general :func:`segment_counts` (the
+    definition; slower): classes 1 = ground-truth thing object / clustered point, 2 = any other
+    point, 0 = ignored (learning class 0)."""
     gt = _check("gt_labels", gt_labels).astype(np.uint32, copy=False)
     p = _check("pred", pred, gt.shape[0]).astype(np.int64, copy=False)
     gt_class = np.where(thing_mask(gt), 1, 2)

@@ -11,6 +11,7 @@ This module imports nothing heavy at module level: the CLI calls :func:`pin_thre
 
 from __future__ import annotations
 
+import functools
 import os
 import platform
 import sys
@@ -62,6 +63,34 @@ def pin_thread_env(threads: int) -> dict[str, str]:
     for name in THREAD_ENV_VARS:
         os.environ[name] = value
     return {name: os.environ[name] for name in THREAD_ENV_VARS if name in os.environ}
+
+
+@functools.cache
+def keep_freed_memory() -> bool:
+    """Ask glibc to keep freed memory for reuse instead of returning it to the kernel.
+
+    flic allocates and frees the same few megabytes for every frame; when glibc hands them back
+    (large blocks are mmapped and unmapped, the heap is trimmed), the next frame faults every page
+    in again, 2-10 us each: the measured cost was tens of page faults per frame and occasional
+    spikes (one Moosmann image build 0.50 ms with 235 faults, 0.09 ms once memory was kept). This
+    raises glibc's mmap and trim thresholds (``mallopt``); it is a no-op elsewhere.
+
+    Returns
+    -------
+    bool
+        Whether the setting was applied.
+    """
+    import ctypes
+
+    try:
+        libc = ctypes.CDLL(None)  # the running program's symbols: libc's on Linux
+    except OSError:  # pragma: no cover
+        return False
+    if not hasattr(libc, "mallopt"):
+        return False
+    m_trim_threshold, m_mmap_threshold = -1, -3
+    ok = libc.mallopt(m_mmap_threshold, 32 << 20) == 1
+    return bool(libc.mallopt(m_trim_threshold, 256 << 20) == 1 and ok)
 
 
 @contextmanager

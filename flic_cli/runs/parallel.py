@@ -15,7 +15,7 @@ from collections.abc import Callable, Iterable, Iterator
 from typing import Any, TypeVar
 
 from flic_cli.errors import FlicInputError
-from flic_cli.runs.environment import THREAD_ENV_VARS
+from flic_cli.runs.environment import THREAD_ENV_VARS, keep_freed_memory
 
 T = TypeVar("T")
 R = TypeVar("R")
@@ -35,6 +35,7 @@ class SingleThreaded:
     def __call__(self, item: Any) -> Any:
         for name in THREAD_ENV_VARS:  # read by BLAS/OpenMP at import in a fresh worker
             os.environ.setdefault(name, "1")
+        keep_freed_memory()
         try:
             from threadpoolctl import threadpool_limits
         except ImportError:  # pragma: no cover - threadpoolctl comes with scikit-learn

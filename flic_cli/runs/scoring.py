@@ -3,7 +3,8 @@
 :class:`ScoreJob` holds what a run sends to its workers once (the segmenters built from the config
 and the projection); called on a frame reference it reads the frame once, prepares it once per
 setting, extracts each ground mask once, runs every method and scores the labels
-(:func:`flic_cli.metrics.match_objects`, :func:`flic_cli.metrics.segmentation_stats`). It returns
+(:func:`flic_cli.metrics.score_frame`: object matches and segmentation statistics, and
+:func:`flic_cli.metrics.panoptic.agnostic_panoptic_counts`). It returns
 small per-object and per-frame records (:class:`FrameScores`), never point clouds.
 """
 
@@ -19,7 +20,7 @@ from flic_cli.classes import class_name
 from flic_cli.errors import FlicInputError
 from flic_cli.io import read_label, read_scan
 from flic_cli.io.base import Frame, FrameRef
-from flic_cli.metrics import distance_band, match_objects, segmentation_stats
+from flic_cli.metrics import distance_band, score_frame
 from flic_cli.metrics.panoptic import agnostic_panoptic_counts
 from flic_cli.projection import Projection
 from flic_cli.runs.pipeline import (
@@ -217,8 +218,7 @@ def add_scores(
 ) -> None:
     """Append one method's per-object and per-frame records of one prepared frame."""
     assert prep.labels is not None  # load_labelled_frame guarantees labels
-    matches = match_objects(prep.labels, labels, prep.points)
-    stats = segmentation_stats(prep.labels, labels)
+    matches, stats = score_frame(prep.labels, labels, prep.points)
     pq = agnostic_panoptic_counts(prep.labels, labels)
     n = len(matches)
     obj = out.objects
