@@ -81,9 +81,8 @@ _BASE_DR_M = 1.0  # the base band applies within this distance beyond the last g
 
 @njit(cache=True)
 def _surface_above(
-    ranges: np.ndarray,
-    sin_el: np.ndarray,
-    cos_el: np.ndarray,
+    rho_img: np.ndarray,
+    z_img: np.ndarray,
     r: int,
     c: int,
     rho: float,
@@ -102,11 +101,10 @@ def _surface_above(
     if lo < -1:
         lo = -1
     for ra in range(r - 1, lo, -1):
-        da = ranges[ra, c]
-        if da <= 0.0:
+        ra_rho = rho_img[ra, c]
+        if ra_rho <= 0.0:
             continue
-        ra_rho = da * cos_el[ra]
-        ra_z = da * sin_el[ra]
+        ra_z = z_img[ra, c]
         if ra_rho < prev - _BEHIND_M or ra_rho > prev + _RUN_JUMP * prev:
             if n == 0:
                 if ra_rho < prev - _OCCLUDER_M - _OCCLUDER_REL * prev:
@@ -150,6 +148,15 @@ def _column_ground(
     base_band: float,
 ) -> np.ndarray:
     h, w = ranges.shape
+    # horizontal range and height of every pixel (0, 0 where empty: cos(elevation) > 0)
+    rho_img = np.empty((h, w), dtype=np.float32)
+    z_img = np.empty((h, w), dtype=np.float32)
+    for r in range(h):
+        se = np.float32(sin_el[r])
+        ce = np.float32(cos_el[r])
+        for c in range(w):
+            rho_img[r, c] = ranges[r, c] * ce
+            z_img[r, c] = ranges[r, c] * se
     tan_gap = np.tan(np.radians(_GAP_SLOPE_DEG))
     tan_seed = np.tan(np.radians(_SEED_SLOPE_DEG))
     max_grad = np.tan(np.radians(_MAX_GRADIENT_DEG))
@@ -159,14 +166,11 @@ def _column_ground(
     g_m = np.zeros(w)  # ground gradient
     last = np.zeros(w, dtype=np.bool_)  # the column's previous valid cell was ground
     for r in range(h - 1, -1, -1):
-        se = sin_el[r]
-        ce = cos_el[r]
         for c in range(w):
-            d = ranges[r, c]
-            if d <= 0.0:
+            rho = rho_img[r, c]
+            if rho <= 0.0:
                 continue
-            rho = d * ce
-            z = d * se
+            z = z_img[r, c]
             cont = False
             dr = 0.0
             e = 0.0
@@ -184,10 +188,10 @@ def _column_ground(
                     cont = True
                     if dr > _FAR_DR_M:
                         for ra in range(r - 1, -1, -1):
-                            da = ranges[ra, c]
-                            if da > 0.0:
-                                stands = abs(da * cos_el[ra] - rho) < 0.25 * dr
-                                if stands and da * sin_el[ra] > z:
+                            ra_rho = rho_img[ra, c]
+                            if ra_rho > 0.0:
+                                stands = abs(ra_rho - rho) < 0.25 * dr
+                                if stands and z_img[ra, c] > z:
                                     ok = False
                                 break
                 else:  # 3. step
@@ -196,16 +200,14 @@ def _column_ground(
                         lim = max_step
                     ok = -(noise + kerb + 3.0 * tan_gap * dr) <= e <= lim
                     if ok:
-                        s = _surface_above(
-                            ranges, sin_el, cos_el, r, c, rho, z, g_m[c], noise, tan_flat
-                        )
+                        s = _surface_above(rho_img, z_img, r, c, rho, z, g_m[c], noise, tan_flat)
                         ok = s == 1 or (s == 2 and abs(e) <= min(band, base_band))
             else:  # 4. seed
                 e = z + sensor_height
                 lim = seed_tol + tan_seed * rho
                 ok = -lim <= e <= lim
                 if ok:
-                    s = _surface_above(ranges, sin_el, cos_el, r, c, rho, z, 0.0, noise, tan_flat)
+                    s = _surface_above(rho_img, z_img, r, c, rho, z, 0.0, noise, tan_flat)
                     ok = s == 1 or (s == 2 and abs(e) <= base_band)
             if ok:
                 if cont:
