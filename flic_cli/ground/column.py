@@ -236,7 +236,7 @@ def column_ground(
     max_step_m: float = 0.4,
     flat_deg: float = 15.0,
     seed_tolerance_m: float = 0.2,
-    base_band_m: float = 0.1,
+    base_band_m: float = 0.05,
 ) -> np.ndarray:
     """Ground pixels by column-wise ground tracking (see the module docstring).
 
@@ -297,7 +297,7 @@ class ColumnGround:
     max_step_m: Annotated[float, Field(ge=0, description="metres")] = 0.4
     flat_deg: Annotated[float, Field(gt=0, lt=60, description="degrees")] = 15.0
     seed_tolerance_m: Annotated[float, Field(gt=0, description="metres")] = 0.2
-    base_band_m: Annotated[float, Field(ge=0, description="metres")] = 0.1
+    base_band_m: Annotated[float, Field(ge=0, description="metres")] = 0.05
 
     def __call__(self, image: RangeImage, points: np.ndarray | None = None) -> np.ndarray:
         """(H, W) bool ground mask of ``image`` (see :func:`column_ground`)."""
