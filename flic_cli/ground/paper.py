@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 from typing import Annotated
 
 import numpy as np
@@ -78,6 +79,17 @@ def paper_tables(
     return np.sin(gap), np.cos(gap), np.tan(lo), np.tan(hi)
 
 
+@functools.lru_cache(maxsize=32)
+def _row_constants(elevation: bytes, max_slope_deg: float) -> tuple[np.ndarray, ...]:
+    """:func:`paper_tables` and the sine and cosine of every row, for one elevation table (given
+    as its float64 bytes): computed once per sensor instead of once per frame."""
+    el = np.frombuffer(elevation, dtype=np.float64)
+    out = (*paper_tables(el, max_slope_deg), np.sin(el), np.cos(el))
+    for a in out:
+        a.setflags(write=False)
+    return out
+
+
 def paper_ground(
     image: RangeImage,
     max_slope_deg: float = 10.0,
@@ -106,16 +118,17 @@ def paper_ground(
     -------
     (H, W) bool, True = ground. Empty pixels are never ground.
     """
-    sin_a, cos_a, tan_lo, tan_hi = paper_tables(image.elevation, max_slope_deg)
-    el = image.elevation
+    el = np.ascontiguousarray(image.elevation, dtype=np.float64)
+    consts = _row_constants(el.tobytes(), float(max_slope_deg))
+    sin_a, cos_a, tan_lo, tan_hi, sin_el, cos_el = consts
     return _paper_ground(
         image.ranges,
         sin_a,
         cos_a,
         tan_lo,
         tan_hi,
-        np.sin(el),
-        np.cos(el),
+        sin_el,
+        cos_el,
         float(sensor_height_m),
         float(np.tan(np.radians(max_slope_deg if height_slope_deg is None else height_slope_deg))),
     )
