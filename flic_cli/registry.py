@@ -63,6 +63,14 @@ REMOVERS: dict[str, Entry] = {
     "bogoslavskyi": Entry(
         "flic_cli.ground.bogoslavskyi:BogoslavskyiGround", "Bogoslavskyi & Stachniss' remover"
     ),
+    "column": Entry(
+        "flic_cli.ground.column:ColumnGround",
+        "flic's own: follows the ground up each column with a local height model",
+    ),
+    "patchworkpp": Entry(
+        "flic_cli.ground.patchworkpp:PatchworkppGround",
+        "Patchwork++ on the points (pip install 'flic[patchworkpp]')",
+    ),
 }
 
 

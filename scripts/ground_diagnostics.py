@@ -6,7 +6,8 @@ object's lowest point, 1 = its top), how far away those objects are, the share o
 classes it removes, and for FLIC 0 MC on what is left the recall (overlap / object) and precision
 (overlap / cluster) of each object's matched cluster. Writes ``results/ground_diagnostics.csv``.
 
-Usage: python scripts/ground_diagnostics.py [DATA] [--out results/ground_diagnostics.csv]
+Usage: python scripts/ground_diagnostics.py [DATA] [--removers paper,bogoslavskyi,column]
+       [--out results/ground/diagnostics.csv]
 """
 
 from __future__ import annotations
@@ -29,12 +30,13 @@ from flic_cli.runs.pipeline import build_segmenter, prepare
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("data", nargs="?", default="../shared/data/semantickitti", type=Path)
-    parser.add_argument("--out", type=Path, default=Path("results/ground_diagnostics.csv"))
+    parser.add_argument("--removers", default="paper,bogoslavskyi,column")
+    parser.add_argument("--out", type=Path, default=Path("results/ground/diagnostics.csv"))
     args = parser.parse_args()
     cfg = load_config()
     ds = open_dataset(args.data)
     rows = []
-    for remover in ("paper", "bogoslavskyi"):
+    for remover in args.removers.split(","):
         seg = build_segmenter(cfg, "flic0", "ground", remover)
         removed_rel, removed_dist, recall, precision = [], [], [], []
         obj_pts = obj_removed = gnd_pts = gnd_removed = 0

@@ -473,3 +473,39 @@ def test_oracle_panoptic_equals_scoring_what_segment_writes(
         assert row["pq"] == round(100 * scores["pq"][c], 2)
         assert (row["tp"], row["fp"], row["fn"]) == (pooled.tp[c], pooled.fp[c], pooled.fn[c])
     assert oracle.loc["person", "tp"] > 0  # the sample has people, and they are scored
+
+
+def test_ground_csv_pools_each_removers_counts(sample_root: Path, tmp_path: Path) -> None:
+    """ground.csv: per remover of the ground setting, the counts of its mask against the
+    ground classes, pooled over frames (recomputed here frame by frame)."""
+    from flic_cli.config import load_config
+    from flic_cli.io import open_dataset
+    from flic_cli.metrics.ground import GroundCounts, ground_counts, ground_scores, point_ground
+    from flic_cli.runs.pipeline import prepare
+
+    result = _evaluate(
+        sample_root,
+        tmp_path / "g",
+        "--methods",
+        "flic0,bogoslavskyi",
+        "--setting",
+        "ground",
+        "--ground-remover",
+        "own",
+    )
+    assert result.exit_code == 0, result.output
+    table = _read(tmp_path / "g" / "ground.csv").set_index("remover")
+    assert list(table.index) == ["column", "bogoslavskyi"]
+    assert "ground extraction column: precision" in result.output
+    cfg = load_config()
+    ds = open_dataset(sample_root)
+    for name in table.index:
+        total = GroundCounts()
+        for ref in ds.refs():
+            prep = prepare(ds.load(ref), "ground", cfg.projection)
+            mask = cfg.remover(name)(prep.image, prep.points)
+            total = total + ground_counts(prep.labels, point_ground(prep.image, mask))
+        expected = ground_scores(total)
+        for key in ("precision", "recall", "f1", "things_removed"):
+            assert table.loc[name, key] == round(expected[key], 2), (name, key)
+        assert table.loc[name, "frames"] == len(ds.refs())

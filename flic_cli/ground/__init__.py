@@ -6,6 +6,10 @@ points) -> (H, W) bool`` (True = ground pixel), see :class:`flic_cli.ground.base
 - ``paper`` -- :class:`PaperGround`, the FLIC paper's tan(beta) test with the height image;
 - ``bogoslavskyi`` -- :class:`BogoslavskyiGround`, Bogoslavskyi & Stachniss' angle image,
   Savitzky-Golay smoothing and breadth-first growth from the lowest row;
+- ``column`` -- :class:`ColumnGround`, flic's own: column-wise ground tracking with a local
+  ground-height model, which keeps the points of objects;
+- ``patchworkpp`` -- :class:`PatchworkppGround`, Patchwork++ on the scan's points (optional extra
+  ``flic[patchworkpp]``);
 - the "No Ground" setting removes the ground classes' points by label before projection
   (:func:`flic_cli.classes.ground_mask`), so no remover runs.
 
@@ -14,9 +18,11 @@ To add a remover: a component class with ``__call__(image, points)``, named in
 ``--ground-remover`` use.
 """
 
-from flic_cli.ground.base import GroundRemover
+from flic_cli.ground.base import GroundRemover, pixel_mask, pixel_owners
 from flic_cli.ground.bogoslavskyi import BogoslavskyiGround, bogoslavskyi_ground
+from flic_cli.ground.column import ColumnGround, column_ground
 from flic_cli.ground.paper import PaperGround, paper_ground
+from flic_cli.ground.patchworkpp import PatchworkppGround
 from flic_cli.registry import REMOVERS as _REMOVERS
 from flic_cli.registry import load_all
 
@@ -26,8 +32,13 @@ REMOVERS: dict[str, type] = load_all(_REMOVERS)
 __all__ = [
     "REMOVERS",
     "BogoslavskyiGround",
+    "ColumnGround",
     "GroundRemover",
     "PaperGround",
+    "PatchworkppGround",
     "bogoslavskyi_ground",
+    "column_ground",
     "paper_ground",
+    "pixel_mask",
+    "pixel_owners",
 ]

@@ -39,6 +39,7 @@ from flic_cli.runs.parallel import resolve_jobs
 from flic_cli.runs.pipeline import build_segmenters
 from flic_cli.runs.scoring import (
     FRAME_COLUMNS,
+    GROUND_COLUMNS,
     OBJECT_COLUMNS,
     PANOPTIC_COLUMNS,
     FrameScores,
@@ -48,6 +49,8 @@ from flic_cli.runs.store import PARTS, open_store, read_parts, write_part
 from flic_cli.runs.tables import (
     all_tables,
     frame_dtypes,
+    ground_dtypes,
+    ground_lines,
     object_dtypes,
     panoptic_dtypes,
     shown_table,
@@ -139,8 +142,13 @@ class EvaluateResult:
     files: list[Path] = field(default_factory=list)
 
     def text(self) -> str:
-        """Caption and table (each IoU_mu and P_mu with its 95% interval), ready to print."""
-        return f"{self.caption}\n{shown_table(self.table)}"
+        """Caption and table (each IoU_mu and P_mu with its 95% interval), the ground
+        extraction's scores, ready to print."""
+        lines = [self.caption, shown_table(self.table)]
+        ground = self.out / "ground.csv"
+        if ground.is_file():
+            lines += ground_lines(pd.read_csv(ground))
+        return "\n".join(lines)
 
 
 def select_labelled(
@@ -361,13 +369,14 @@ def _write_tables(
     ).reset_index(drop=True)
     frames = frames.sort_values(["method", "setting", "sequence", "frame"], kind="stable")
     frames = frames.reset_index(drop=True)
+    ground = read_parts(parts, keys, "ground", GROUND_COLUMNS, ground_dtypes(seqs))
     panoptic = None
     if oracle:
         panoptic = read_parts(
             parts, keys, "panoptic", PANOPTIC_COLUMNS, panoptic_dtypes(methods, seqs)
         )
     files = []
-    tables = all_tables(objects, frames, methods, settings, panoptic, runtimes)
+    tables = all_tables(objects, frames, methods, settings, panoptic, runtimes, ground)
     for name, df in tables.items():
         with atomic_write(out / name) as tmp:
             df.to_csv(tmp, index=False)

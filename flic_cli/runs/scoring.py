@@ -10,6 +10,7 @@ small per-object and per-frame records (:class:`FrameScores`), never point cloud
 
 from __future__ import annotations
 
+import dataclasses
 import time
 from dataclasses import dataclass, field
 from typing import Any
@@ -21,6 +22,7 @@ from flic_cli.errors import FlicInputError
 from flic_cli.io import read_label, read_scan
 from flic_cli.io.base import Frame, FrameRef
 from flic_cli.metrics import distance_band, score_frame
+from flic_cli.metrics.ground import ground_counts, point_ground
 from flic_cli.metrics.panoptic import agnostic_panoptic_counts
 from flic_cli.projection import Projection
 from flic_cli.runs.pipeline import (
@@ -66,6 +68,20 @@ FRAME_COLUMNS: tuple[str, ...] = (
     "pq_iou_sum",
 )
 
+#: Columns of the per-frame ground-extraction records (ground setting, one row per remover).
+GROUND_COLUMNS: tuple[str, ...] = (
+    "remover",
+    "sequence",
+    "frame",
+    "tp",
+    "fp",
+    "fn",
+    "tn",
+    "things",
+    "things_removed",
+    "seconds",
+)
+
 #: Columns of the per-class panoptic counts with oracle semantics (``--semantics oracle``).
 PANOPTIC_COLUMNS: tuple[str, ...] = (
     "method",
@@ -90,11 +106,16 @@ class FrameScores:
     frame: int
     objects: dict[str, list] = field(default_factory=lambda: {c: [] for c in OBJECT_COLUMNS})
     frames: dict[str, list] = field(default_factory=lambda: {c: [] for c in FRAME_COLUMNS})
+    ground: dict[str, list] = field(default_factory=lambda: {c: [] for c in GROUND_COLUMNS})
     panoptic: dict[str, list] | None = None
 
     def tables(self) -> dict[str, tuple[tuple[str, ...], dict[str, list]]]:
         """The records by part name, with their columns (the ``frames`` part last)."""
-        out = {"objects": (OBJECT_COLUMNS, self.objects), "frames": (FRAME_COLUMNS, self.frames)}
+        out = {
+            "objects": (OBJECT_COLUMNS, self.objects),
+            "ground": (GROUND_COLUMNS, self.ground),
+            "frames": (FRAME_COLUMNS, self.frames),
+        }
         if self.panoptic is not None:
             out["panoptic"] = (PANOPTIC_COLUMNS, self.panoptic)
         return out
@@ -147,6 +168,7 @@ class ScoreJob:
                 labels = seg.method.segment(prep.image, prep.points, ground)
                 seconds = time.perf_counter() - start + ground_seconds
                 add_scores(out, seg.name, setting, prep, labels, seconds)
+            grounds.add_records(out)
         if self.oracle:
             out.panoptic = oracle_panoptic(frame, self.segmenters[0][1], self.projection)
         return out
@@ -206,6 +228,19 @@ class GroundCache:
             mask = seg.extract_ground(self.prep.image, self.prep.points)
             self.masks[seg.ground_name] = (mask, time.perf_counter() - start)
         return self.masks[seg.ground_name]
+
+    def add_records(self, out: FrameScores) -> None:
+        """Append each remover's ground scores of this frame (against the ground classes)."""
+        assert self.prep.labels is not None
+        for name, (mask, seconds) in self.masks.items():
+            if name is None:
+                continue
+            counts = ground_counts(self.prep.labels, point_ground(self.prep.image, mask))
+            row = {"remover": name, "sequence": self.prep.ref.sequence,
+                   "frame": self.prep.ref.frame, **dataclasses.asdict(counts),
+                   "seconds": round(seconds, 6)}  # fmt: skip
+            for key in GROUND_COLUMNS:
+                out.ground[key].append(row[key])
 
 
 def add_scores(

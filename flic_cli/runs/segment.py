@@ -27,6 +27,7 @@ from flic_cli.io import open_dataset
 from flic_cli.io.atomic import staged_folder
 from flic_cli.io.base import FrameRef
 from flic_cli.io.ply import write_ply
+from flic_cli.metrics.ground import point_ground
 from flic_cli.projection import Projection
 from flic_cli.runs.frames import FrameLoop, Skipped, sort_skipped, write_skipped
 from flic_cli.runs.output import check_output_dir
@@ -69,12 +70,9 @@ class Segmented:
 
     def ground_points(self) -> np.ndarray:
         """(N,) bool, the evaluated points in a ground pixel."""
-        out = np.zeros(self.labels.shape[0], dtype=bool)
-        if self.ground is not None:
-            pix = self.prep.image.point_pixel
-            has = pix >= 0
-            out[has] = self.ground.reshape(-1)[pix[has]]
-        return out
+        if self.ground is None:
+            return np.zeros(self.labels.shape[0], dtype=bool)
+        return point_ground(self.prep.image, self.ground)
 
 
 @dataclass(frozen=True)

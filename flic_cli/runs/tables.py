@@ -9,6 +9,9 @@ Scores are in percent with two decimals, as in the paper:
   :mod:`flic_cli.metrics.panoptic`): class-agnostic over the thing objects for every method and
   setting, with the interval of PQ; with oracle semantics also per class and their means;
 - ``quality_speed.csv``: IoU_mu (with its interval) against the median time per frame;
+- ``ground.csv``: each ground remover of the ground setting against the ground classes
+  (precision, recall, F1 of the ground points, share of thing-object points it removed, median
+  ms per frame; :mod:`flic_cli.metrics.ground`);
 - ``per_setting.csv``: every P_x and the segmentation statistics per method and setting;
 - ``per_sequence.csv``, ``by_class.csv``, ``by_distance.csv``: the same scores per sequence, per
   semantic class and per range band of the object's centroid (0-20, 20-40, >40 m).
@@ -71,6 +74,17 @@ PANOPTIC_TABLE_COLUMNS: tuple[str, ...] = (
     "pq_high",
 )
 
+#: Columns of ``ground.csv``.
+GROUND_TABLE_COLUMNS: tuple[str, ...] = (
+    "remover",
+    "frames",
+    "precision",
+    "recall",
+    "f1",
+    "things_removed",
+    "ms_per_frame_median",
+)
+
 #: Columns of ``quality_speed.csv``.
 QUALITY_SPEED_COLUMNS: tuple[str, ...] = (
     "method",
@@ -125,6 +139,48 @@ def frame_dtypes(methods: list[str], settings: tuple[str, ...], seqs: list[str])
         "pq_fn": "int64",
         "pq_iou_sum": "float64",
     }
+
+
+def ground_dtypes(seqs: list[str]) -> dict:
+    """Column dtypes of the per-frame ground-extraction records."""
+    return {
+        "remover": "str",
+        "sequence": pd.CategoricalDtype(seqs, ordered=True),
+        **{k: "int64" for k in ("frame", "tp", "fp", "fn", "tn", "things", "things_removed")},
+        "seconds": "float64",
+    }
+
+
+def ground_table(ground: pd.DataFrame) -> pd.DataFrame:
+    """``ground.csv``: one row per remover, its counts pooled over frames (scores in percent)."""
+    from flic_cli.metrics.ground import GroundCounts, ground_scores
+
+    rows = []
+    for remover, g in ground.groupby("remover", sort=False):
+        counts = GroundCounts(
+            **{k: int(g[k].sum()) for k in ("tp", "fp", "fn", "tn", "things", "things_removed")},
+            frames=len(g),
+        )
+        scores = ground_scores(counts)
+        rows.append(
+            {
+                "remover": remover,
+                "frames": len(g),
+                **{k: percent(scores[k] / 100.0) for k in GROUND_TABLE_COLUMNS[2:6]},
+                "ms_per_frame_median": round(1000.0 * float(g["seconds"].median()), 4),
+            }
+        )
+    return pd.DataFrame(rows, columns=list(GROUND_TABLE_COLUMNS))
+
+
+def ground_lines(table: pd.DataFrame) -> list[str]:
+    """``ground.csv`` as printed, one line per remover."""
+    return [
+        f"ground extraction {r.remover}: precision {r.precision:.2f} %, recall {r.recall:.2f} %, "
+        f"F1 {r.f1:.2f}, thing-object points removed {r.things_removed:.2f} %, "
+        f"{r.ms_per_frame_median:.3g} ms per frame (median of {r.frames})"
+        for r in table.itertuples()
+    ]
 
 
 def panoptic_dtypes(methods: list[str], seqs: list[str]) -> dict:
@@ -418,6 +474,7 @@ def all_tables(
     settings: tuple[str, ...],
     oracle: pd.DataFrame | None = None,
     runtimes: pd.DataFrame | None = None,
+    ground: pd.DataFrame | None = None,
 ) -> dict[str, pd.DataFrame]:
     """Every table of ``flic evaluate`` by file name (``table.csv`` last)."""
     per_setting = grouped(objects, ["method", "setting"], frames)
@@ -431,5 +488,6 @@ def all_tables(
         "by_distance.csv": grouped(objects, ["method", "setting", "band"]),
         "panoptic.csv": panoptic_table(frames, oracle, methods),
         "quality_speed.csv": quality_speed_table(table, frames, runtimes),
+        **({"ground.csv": ground_table(ground)} if ground is not None and len(ground) else {}),
         "table.csv": table,
     }
