@@ -1,6 +1,7 @@
 """Old against new: reading, projection and scoring timed in one process, and instruction counts.
 
-Loads the reading (``flic_cli/io/semantickitti.py``), projection (``flic_cli/range_image.py``) and
+Loads the reading (``flic_cli/io/semantickitti.py``), projection (then ``flic_cli/range_image.py``,
+now ``flic_cli/projection.py``) and
 scoring (``flic_cli/metrics/instances.py``) code of a base git revision beside the working tree's,
 runs both on every frame, alternating which goes first, checks that they give the same results and
 prints the medians (one thread). On a machine shared with other jobs wall-clock times are noisy;
@@ -39,7 +40,7 @@ pin_thread_env(1)  # before numpy/numba are imported
 
 import numpy as np  # noqa: E402
 
-from flic_cli import range_image  # noqa: E402
+from flic_cli import projection  # noqa: E402
 from flic_cli.classes import ground_mask  # noqa: E402
 from flic_cli.config import load_config  # noqa: E402
 from flic_cli.io import open_dataset, semantickitti  # noqa: E402
@@ -95,7 +96,7 @@ class Frames:
         for ref in self.refs:
             scan = semantickitti.read_scan(ref.path, ref.label_path)
             keep = None if setting == "ground" else ~ground_mask(scan.labels)
-            image = range_image.project_points(scan.points, keep=keep, **PROJECTION)
+            image = projection.project_points(scan.points, keep=keep, **PROJECTION)
             points = scan.points if keep is None else scan.points[keep]
             gt = scan.labels if keep is None else scan.labels[keep]
             pred = seg(image, points)[0]
@@ -197,7 +198,7 @@ def time_moosmann(args: argparse.Namespace) -> None:
 
 
 def current() -> dict[str, ModuleType]:
-    return {"read": semantickitti, "project": range_image, "score": instances}
+    return {"read": semantickitti, "project": projection, "score": instances}
 
 
 CG_HELPER = r"""

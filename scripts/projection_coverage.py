@@ -18,7 +18,7 @@ from tqdm import tqdm
 
 from flic_cli.io import open_dataset
 from flic_cli.io.atomic import atomic_write
-from flic_cli.range_image import project_points
+from flic_cli.projection import project_points
 
 
 def main() -> None:

@@ -12,7 +12,8 @@ from flic_cli.ground import bogoslavskyi_ground, paper_ground
 from flic_cli.ground.bogoslavskyi import _repair_depth, savgol_kernel
 from flic_cli.ground.paper import paper_tables
 from flic_cli.io import open_dataset
-from flic_cli.range_image import RangeImage, project_points
+from flic_cli.projection import project_points
+from flic_cli.range_image import RangeImage
 
 
 def _frames(sample):

@@ -9,7 +9,7 @@ from hypothesis import strategies as st
 
 from flic_cli.errors import FlicInputError
 from flic_cli.ground import REMOVERS, pixel_mask, pixel_owners
-from flic_cli.range_image import project_points
+from flic_cli.projection import project_points
 
 
 @settings(max_examples=60, deadline=None)

@@ -289,7 +289,8 @@ def test_unit_weights_count_pixels(image, threshold, min_size):
 
 
 def test_point_counts_of_a_projection_and_of_a_sensor_image():
-    from flic_cli.range_image import from_sensor_image, project_points
+    from flic_cli.projection import project_points
+    from flic_cli.range_image import from_sensor_image
 
     # three points in one pixel (same direction, 5.0 / 5.1 / 5.2 m), one alone, 64 rings faked
     # by a spherical projection: the pixel holding three points counts 3

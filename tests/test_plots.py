@@ -20,7 +20,7 @@ from flic_cli.plots import (
     render_frame_views,
     render_segmentation,
 )
-from flic_cli.range_image import project_points
+from flic_cli.projection import project_points
 
 CAR, ROAD, BUILDING = 10, 40, 50
 

@@ -8,12 +8,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from flic_cli.io import open_dataset
-from flic_cli.range_image import (
-    from_sensor_image,
-    from_sensor_image_with_points,
-    project_points,
-    recover_rings,
-)
+from flic_cli.projection import project_points, recover_rings
+from flic_cli.range_image import from_sensor_image, from_sensor_image_with_points
 
 
 def naive_rows(points: np.ndarray) -> int:
@@ -79,8 +75,7 @@ def test_spherical_fallback_on_a_scan_not_in_scan_order(kitti_root):
     ds = open_dataset(kitti_root, ["00"], (0, 1))
     pts = ds.load(ds.refs()[0]).points
     shuffled = pts[np.random.default_rng(0).permutation(len(pts))]
-    with pytest.warns(UserWarning, match="spherical"):
-        img = project_points(shuffled)
+    img = project_points(shuffled)  # the caller, which knows the file, warns (pipeline.prepare)
     assert img.projection == "spherical"
 
 
@@ -258,8 +253,8 @@ def test_projection_equals_the_reference_on_random_scans(
 
 
 def test_projection_of_an_empty_scan_and_a_bad_keep_mask():
-    with pytest.warns(UserWarning, match="spherical"):
-        img = project_points(np.zeros((0, 3), dtype=np.float32))
+    img = project_points(np.zeros((0, 3), dtype=np.float32))
+    assert img.projection == "spherical"  # no rings in an empty scan
     assert img.point_pixel.size == 0 and not img.ranges.any()
     pts = synthetic_scan(0, 4, 300, 0.0, np.float32)
     with pytest.raises(ValueError, match="keep"):
@@ -306,7 +301,7 @@ def test_sensor_image_points_equal_to_points(seed, height, width, empty_share):
     distinct=st.sampled_from([1, 2, 3, 40, 0]),  # 0: continuous values
 )
 def test_segment_medians_equal_np_median(seed, lengths, distinct):
-    from flic_cli.range_image import _segment_medians
+    from flic_cli.projection import _segment_medians
 
     rng = np.random.default_rng(seed)
     n = sum(lengths)

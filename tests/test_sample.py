@@ -13,7 +13,7 @@ from flic_cli.classes import CLASS_NAMES
 from flic_cli.classes import THING_CLASSES as THINGS
 from flic_cli.ground import paper_ground
 from flic_cli.io import open_dataset
-from flic_cli.range_image import project_points
+from flic_cli.projection import project_points
 
 FRAMES = 3
 ID = {name: cid for cid, name in CLASS_NAMES.items()}

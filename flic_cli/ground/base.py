@@ -39,7 +39,7 @@ def _owners(pix: np.ndarray, rng: np.ndarray, n_pixels: int) -> np.ndarray:
 def pixel_owners(image: RangeImage, points: np.ndarray) -> np.ndarray:
     """The point that owns every pixel: the nearest of the points that fall into it.
 
-    This is the point whose range the pixel holds (:func:`flic_cli.range_image.project_points`
+    This is the point whose range the pixel holds (:func:`flic_cli.projection.project_points`
     keeps the nearest); ties go to the first such point.
 
     Parameters

@@ -197,11 +197,31 @@ def _grow_and_shift(
     return ground
 
 
+@dataclass(frozen=True, config=STRICT)
+class BogoslavskyiGround:
+    """Bogoslavskyi & Stachniss' ground removal as a :class:`flic_cli.ground.base.GroundRemover`.
+
+    Attributes
+    ----------
+    angle_deg : largest angle difference between neighbouring ground cells, degrees.
+    window : Savitzky-Golay window, rows.
+    start_angle_deg : a column's lowest cell seeds the growth only below this angle, degrees.
+    """
+
+    angle_deg: Annotated[float, Field(gt=0, lt=90, description="degrees")] = 9.0
+    window: Literal[5, 7, 9, 11] = 5
+    start_angle_deg: Annotated[float, Field(gt=0, lt=90, description="degrees")] = START_ANGLE_DEG
+
+    def __call__(self, image: RangeImage, points: np.ndarray | None = None) -> np.ndarray:
+        """(H, W) bool ground mask of ``image`` (see :func:`bogoslavskyi_ground`)."""
+        return bogoslavskyi_ground(image, self.angle_deg, self.window, self.start_angle_deg)
+
+
 def bogoslavskyi_ground(
     image: RangeImage,
-    angle_deg: float = 9.0,
-    window: int = 5,
-    start_angle_deg: float = START_ANGLE_DEG,
+    angle_deg: float = BogoslavskyiGround.angle_deg,
+    window: int = BogoslavskyiGround.window,
+    start_angle_deg: float = BogoslavskyiGround.start_angle_deg,
 ) -> np.ndarray:
     """Ground pixels as Bogoslavskyi & Stachniss' code marks them (see the module docstring).
 
@@ -213,6 +233,8 @@ def bogoslavskyi_ground(
     window : Savitzky-Golay window, rows (5, 7, 9 or 11, as their code allows).
     start_angle_deg : a column's lowest pixel starts the growth only up to this smoothed angle,
         degrees (30, fixed in their code).
+
+    The defaults are those of :class:`BogoslavskyiGround`.
 
     Returns
     -------
@@ -233,23 +255,3 @@ def bogoslavskyi_ground(
         float(np.radians(start_angle_deg)),
     )
     return ground & (ranges > 0)
-
-
-@dataclass(frozen=True, config=STRICT)
-class BogoslavskyiGround:
-    """Bogoslavskyi & Stachniss' ground removal as a :class:`flic_cli.ground.base.GroundRemover`.
-
-    Attributes
-    ----------
-    angle_deg : largest angle difference between neighbouring ground cells, degrees.
-    window : Savitzky-Golay window, rows.
-    start_angle_deg : a column's lowest cell seeds the growth only below this angle, degrees.
-    """
-
-    angle_deg: Annotated[float, Field(gt=0, lt=90, description="degrees")] = 9.0
-    window: Literal[5, 7, 9, 11] = 5
-    start_angle_deg: Annotated[float, Field(gt=0, lt=90, description="degrees")] = START_ANGLE_DEG
-
-    def __call__(self, image: RangeImage, points: np.ndarray | None = None) -> np.ndarray:
-        """(H, W) bool ground mask of ``image`` (see :func:`bogoslavskyi_ground`)."""
-        return bogoslavskyi_ground(image, self.angle_deg, self.window, self.start_angle_deg)

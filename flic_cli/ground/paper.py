@@ -90,50 +90,6 @@ def _row_constants(elevation: bytes, max_slope_deg: float) -> tuple[np.ndarray, 
     return out
 
 
-def paper_ground(
-    image: RangeImage,
-    max_slope_deg: float = 10.0,
-    sensor_height_m: float = 1.73,
-    height_slope_deg: float | None = None,
-) -> np.ndarray:
-    """Ground pixels by the paper's surface-angle test, keeping elevated horizontal surfaces.
-
-    For every cell, the surface angle beta with the cell above is tested through
-    ``tan(beta) = d2 sin(alpha) / (d1 - d2 cos(alpha))`` (no arctan; sin and cos precomputed per
-    row). A cell is ground when beta is within ``max_slope_deg`` of the angle a horizontal surface
-    would give, unless the height image puts it above the line that rises from the wheel contact
-    point (``sensor_height_m`` below the sensor) at ``max_slope_deg``: car roofs and hoods are
-    horizontal but stay.
-
-    Parameters
-    ----------
-    image : the range image.
-    max_slope_deg : accepted deviation from horizontal, degrees.
-    sensor_height_m : height of the sensor above the road, metres.
-    height_slope_deg : slope of the height line, degrees (default: ``max_slope_deg``, as in the
-        paper). Horizontal surfaces below the line are ground: at 10 deg the line passes the
-        sensor's height about 10 m out, so car roofs farther away than that count as ground.
-
-    Returns
-    -------
-    (H, W) bool, True = ground. Empty pixels are never ground.
-    """
-    el = np.ascontiguousarray(image.elevation, dtype=np.float64)
-    consts = _row_constants(el.tobytes(), float(max_slope_deg))
-    sin_a, cos_a, tan_lo, tan_hi, sin_el, cos_el = consts
-    return _paper_ground(
-        image.ranges,
-        sin_a,
-        cos_a,
-        tan_lo,
-        tan_hi,
-        sin_el,
-        cos_el,
-        float(sensor_height_m),
-        float(np.tan(np.radians(max_slope_deg if height_slope_deg is None else height_slope_deg))),
-    )
-
-
 @dataclass(frozen=True, config=STRICT)
 class PaperGround:
     """The paper's ground extraction as a :class:`flic_cli.ground.base.GroundRemover`.
@@ -153,3 +109,49 @@ class PaperGround:
     def __call__(self, image: RangeImage, points: np.ndarray | None = None) -> np.ndarray:
         """(H, W) bool ground mask of ``image`` (see :func:`paper_ground`)."""
         return paper_ground(image, self.max_slope_deg, self.sensor_height_m, self.height_slope_deg)
+
+
+def paper_ground(
+    image: RangeImage,
+    max_slope_deg: float = PaperGround.max_slope_deg,
+    sensor_height_m: float = PaperGround.sensor_height_m,
+    height_slope_deg: float = PaperGround.height_slope_deg,
+) -> np.ndarray:
+    """Ground pixels by the paper's surface-angle test, keeping elevated horizontal surfaces.
+
+    For every cell, the surface angle beta with the cell above is tested through
+    ``tan(beta) = d2 sin(alpha) / (d1 - d2 cos(alpha))`` (no arctan; sin and cos precomputed per
+    row). A cell is ground when beta is within ``max_slope_deg`` of the angle a horizontal surface
+    would give, unless the height image puts it above the line that rises from the wheel contact
+    point (``sensor_height_m`` below the sensor) at ``max_slope_deg``: car roofs and hoods are
+    horizontal but stay.
+
+    Parameters
+    ----------
+    image : the range image.
+    max_slope_deg : accepted deviation from horizontal, degrees.
+    sensor_height_m : height of the sensor above the road, metres.
+    height_slope_deg : slope of the height line, degrees (the paper: the same 10 deg as
+        ``max_slope_deg``). Horizontal surfaces below the line are ground: at 10 deg the line
+        passes the sensor's height about 10 m out, so car roofs farther away count as ground.
+
+    The defaults are those of :class:`PaperGround`.
+
+    Returns
+    -------
+    (H, W) bool, True = ground. Empty pixels are never ground.
+    """
+    el = np.ascontiguousarray(image.elevation, dtype=np.float64)
+    consts = _row_constants(el.tobytes(), float(max_slope_deg))
+    sin_a, cos_a, tan_lo, tan_hi, sin_el, cos_el = consts
+    return _paper_ground(
+        image.ranges,
+        sin_a,
+        cos_a,
+        tan_lo,
+        tan_hi,
+        sin_el,
+        cos_el,
+        float(sensor_height_m),
+        float(np.tan(np.radians(height_slope_deg))),
+    )

@@ -45,7 +45,7 @@ class Frame:
     labels : (N,) uint32 SemanticKITTI encoding (semantic = low 16 bits, instance = high 16 bits)
         or None when the dataset has no labels
     image : the sensor's own range image when the format is one (Moosmann), else None (the
-        points are projected by :func:`flic_cli.range_image.project_points`). When set,
+        points are projected by :func:`flic_cli.projection.project_points`). When set,
         ``points[i]`` is the point of pixel ``image.point_pixel[i]``.
     finite : (N_read,) bool over the points as stored, True for those in ``points`` (points with
         NaN or infinite coordinates are dropped when read); None when all were kept.

@@ -106,9 +106,7 @@ def prepare(
             ranges.reshape(frame.image.ranges.shape), frame.image.elevation, pix, "native"
         )
     else:
-        with warnings.catch_warnings():
-            warnings.filterwarnings("ignore", message="ring recovery did not find")
-            image = projection(points, keep)
+        image = projection(points, keep)
         if projection.mode == "rings" and image.projection == "spherical":
             warnings.warn(
                 f"{frame.ref.path}: ring recovery did not find {projection.rows} rings in scan "

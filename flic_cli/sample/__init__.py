@@ -99,7 +99,7 @@ the parked cars) does not raise it beyond about 50-60. The KITTI scans hold abou
 Outputs
 -------
 :func:`write_sample` writes the same frames both as a SemanticKITTI sequence (points in the
-sensor's scan order, so that :func:`flic_cli.range_image.project_points` recovers the 64 rings) and
+sensor's scan order, so that :func:`flic_cli.projection.project_points` recovers the 64 rings) and
 as a Moosmann-style log (870 x 64 16-bit PNG range images + ``img.cfg``), into a temporary folder
 renamed into place once complete. :func:`ensure_sample` writes the default sample into
 :func:`default_sample_dir` once and reuses it afterwards.

@@ -44,7 +44,7 @@ def render_kitti(
     rays without a return are left out. Point ``i`` is therefore the ``i``-th pixel of
     ``np.flatnonzero(ranges > 0)`` over the ``(len(pitch_deg), width)`` grid of
     ``cast(scene, pitch_deg, kitti_azimuths(width), ...)``, and
-    :func:`flic_cli.range_image.project_points` recovers the rings from this order.
+    :func:`flic_cli.projection.project_points` recovers the rings from this order.
 
     Parameters
     ----------
