@@ -23,7 +23,7 @@ import pandas as pd
 
 from flic_cli.config import load_config
 from flic_cli.io import open_dataset
-from flic_cli.io.atomic import atomic_write
+from flic_cli.io.atomic import write_table
 
 
 def main() -> None:
@@ -60,9 +60,7 @@ def main() -> None:
         f"C++ {df['ground_cpp'].sum() / n:.4f}, flic {df['ground_flic'].sum() / n:.4f}"
     )
     if args.out is not None:
-        args.out.parent.mkdir(parents=True, exist_ok=True)
-        with atomic_write(args.out) as tmp:
-            df.to_csv(tmp, index=False)
+        write_table(args.out, df)
 
 
 if __name__ == "__main__":

@@ -22,7 +22,7 @@ from tqdm import tqdm
 from flic_cli.classes import GROUND_CLASSES, THING_CLASSES
 from flic_cli.config import load_config
 from flic_cli.io import open_dataset
-from flic_cli.io.atomic import atomic_write
+from flic_cli.io.atomic import write_table
 from flic_cli.metrics import match_objects
 from flic_cli.runs.pipeline import build_segmenter, prepare
 
@@ -82,8 +82,7 @@ def main() -> None:
             )
         )
     df = pd.DataFrame(rows)
-    with atomic_write(args.out) as tmp:
-        df.to_csv(tmp, index=False)
+    write_table(args.out, df)
     print(df.T.to_string(header=False))
 
 

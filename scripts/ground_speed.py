@@ -23,7 +23,7 @@ import pandas as pd
 
 from flic_cli.config import load_config
 from flic_cli.io import open_dataset
-from flic_cli.io.atomic import atomic_write
+from flic_cli.io.atomic import write_table
 from flic_cli.runs.pipeline import prepare
 
 
@@ -68,9 +68,7 @@ def main() -> None:
     df = pd.DataFrame(rows)
     print(df.to_string(index=False))
     if args.out is not None:
-        args.out.parent.mkdir(parents=True, exist_ok=True)
-        with atomic_write(args.out) as tmp:
-            df.to_csv(tmp, index=False)
+        write_table(args.out, df)
 
 
 if __name__ == "__main__":

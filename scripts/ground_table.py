@@ -27,7 +27,7 @@ import pandas as pd
 
 from flic_cli.config import load_config
 from flic_cli.io import open_dataset
-from flic_cli.io.atomic import atomic_write
+from flic_cli.io.atomic import write_table
 from flic_cli.metrics.ground import GroundCounts, ground_counts, ground_scores, point_ground
 from flic_cli.runs.pipeline import prepare
 
@@ -70,9 +70,7 @@ def main() -> None:
         rows.append(row)
         print(row, flush=True)
     df = pd.DataFrame(rows)
-    args.out.parent.mkdir(parents=True, exist_ok=True)
-    with atomic_write(args.out) as tmp:
-        df.to_csv(tmp, index=False)
+    write_table(args.out, df)
     print(df.T.to_string(header=False))
 
 

@@ -17,7 +17,7 @@ import pandas as pd
 from tqdm import tqdm
 
 from flic_cli.io import open_dataset
-from flic_cli.io.atomic import atomic_write
+from flic_cli.io.atomic import write_table
 from flic_cli.projection import project_points
 
 
@@ -45,8 +45,7 @@ def main() -> None:
             )
         )
     df = pd.DataFrame(rows)
-    with atomic_write(args.out) as tmp:
-        df.to_csv(tmp, index=False)
+    write_table(args.out, df)
     print(
         f"{len(df)} frames, width {args.width}: "
         f"mean coverage rings {100 * df.coverage_rings.mean():.2f}% "

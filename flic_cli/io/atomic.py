@@ -13,8 +13,12 @@ import tempfile
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from flic_cli.errors import FlicInputError
+
+if TYPE_CHECKING:
+    import pandas as pd
 
 
 @contextmanager
@@ -102,3 +106,15 @@ def staged_folder(out: str | Path) -> Iterator[Path]:
             os.replace(src, dst)
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
+
+
+def write_table(path: str | Path, table: pd.DataFrame) -> Path:
+    """Write a table as CSV (no index column) atomically; missing parent folders are created.
+
+    Returns
+    -------
+    The written file.
+    """
+    with atomic_write(path) as tmp:
+        table.to_csv(tmp, index=False)
+    return Path(path)

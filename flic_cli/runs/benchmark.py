@@ -59,7 +59,7 @@ import pandas as pd
 from flic_cli.config import Config
 from flic_cli.errors import FlicInputError
 from flic_cli.io import open_dataset
-from flic_cli.io.atomic import atomic_write
+from flic_cli.io.atomic import atomic_write, write_table
 from flic_cli.io.base import FrameRef
 from flic_cli.projection import Projection
 from flic_cli.runs.environment import collect_environment, environment_line, thread_limits
@@ -280,11 +280,6 @@ def histogram(frames: pd.DataFrame, names: list[str]) -> pd.DataFrame:
     return pd.concat(parts, ignore_index=True)
 
 
-def _write_csv(df: pd.DataFrame, path: Path) -> None:
-    with atomic_write(path) as tmp:
-        df.to_csv(tmp, index=False)
-
-
 def _write_json(obj: dict[str, Any], path: Path) -> None:
     with atomic_write(path) as tmp:
         tmp.write_text(json.dumps(obj, indent=2, default=str) + "\n", encoding="utf-8")
@@ -501,9 +496,9 @@ def run_benchmark(
     files = [out / n for n in ("frames.csv", "summary.csv", "histogram.csv", "environment.json")]
     if loop.skipped:
         files.append(write_skipped(out / "skipped.csv", sort_skipped(loop.skipped)))
-    _write_csv(table, files[0])
-    _write_csv(summary, files[1])
-    _write_csv(hist, files[2])
+    write_table(files[0], table)
+    write_table(files[1], summary)
+    write_table(files[2], hist)
     _write_json(env, files[3])
     if plots:
         name = Path(data).name or str(data)

@@ -31,7 +31,8 @@ import pandas as pd
 
 from flic_cli.config import Config
 from flic_cli.errors import FlicInputError
-from flic_cli.io import atomic_write, open_dataset
+from flic_cli.io import open_dataset
+from flic_cli.io.atomic import write_table
 from flic_cli.io.base import FrameRef
 from flic_cli.runs.frames import FrameLoop, Skipped, sort_skipped, write_skipped
 from flic_cli.runs.output import check_output_dir
@@ -378,8 +379,7 @@ def _write_tables(
     files = []
     tables = all_tables(objects, frames, methods, settings, panoptic, runtimes, ground)
     for name, df in tables.items():
-        with atomic_write(out / name) as tmp:
-            df.to_csv(tmp, index=False)
+        write_table(out / name, df)
         files.append(out / name)
     from flic_cli.plots import plot_quality_speed
 

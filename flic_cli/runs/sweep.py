@@ -16,7 +16,7 @@ import pandas as pd
 
 from flic_cli.config import Config
 from flic_cli.errors import FlicInputError
-from flic_cli.io.atomic import atomic_write
+from flic_cli.io.atomic import write_table
 from flic_cli.io.base import FrameRef
 from flic_cli.metrics import match_objects, summarize
 from flic_cli.projection import Projection
@@ -207,8 +207,7 @@ def run_sweep(
     best = int(np.nanargmax(raw)) if np.isfinite(raw).any() else 0
 
     csv_path, png_path = out / "sweep.csv", out / "sweep.png"
-    with atomic_write(csv_path) as tmp:
-        table.to_csv(tmp, index=False)
+    write_table(csv_path, table)
     from flic_cli.plots import plot_sweep
 
     plot_sweep(
