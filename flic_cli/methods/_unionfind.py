@@ -6,33 +6,40 @@ paper's super-sized image (4x the pixels, then extra passes for the 360 deg seam
 Connections) and ``scipy.sparse.csgraph.connected_components`` needs the edge list built as a
 sparse matrix first; both cost more than the clustering itself. The tests check this kernel against
 ``connected_components`` of a brute-force graph built from the 3D coordinates, and against the
-previous pixel-by-pixel union-find kept in the tests.
+previous pixel-by-pixel union-find (``tests/reference_kernels.py``): same labels.
 
-How it works (two-pass labelling over *runs*, the classic scheme for binary images with the
-pixel test replaced by an edge test):
+How it works: two-pass labelling over *runs* (the classic scheme for binary images, with the pixel
+test replaced by an edge test), written so that the per-pixel work has no branches:
 
-1. Row by row, branch-free loops that LLVM vectorises: the node ranges (the range where the pixel
-   takes part, 0 elsewhere: no measurement, or excluded e.g. as ground), the link to the left
-   neighbour and the link to the neighbour above of every pixel.
-2. One loop over the row's pixels: a *run* is a maximal stretch of nodes linked to their left
-   neighbours; every run gets a new provisional label (so labels are numbered in raster order of
-   the runs' first pixels) and the weight of its pixels. A vertical link merges the run with the
-   run above, unless the square of links to its left already did (left, up-left and up-left to up
-   linked).
-3. The 360 deg seam and the Map Connections merge labels of linked pixel pairs; a pair whose labels
-   already share a parent is skipped before the link is even tested.
-4. One pass over the provisional labels (few: a run is ~10 pixels) flattens the union-find forest,
-   sums the weights of each component and numbers the kept components 1..K in order of their
-   smallest label, i.e. of their first pixel in raster order; then labels per pixel or per point.
+1. Row by row, loops that LLVM vectorises compute the node ranges (the range where the pixel takes
+   part, 0 elsewhere: no measurement, or left out e.g. as ground), and whether each pixel is linked
+   to its left neighbour and to the one above. These flags are packed into 64-bit words.
+2. A *run* is a maximal stretch of nodes, each linked to its left neighbour. Word operations give
+   the runs' first and last pixels, and the pixels whose link upwards must merge two labels: the
+   first pixel of a run takes the label above it when linked upwards (else a new label), and a
+   later pixel's link upwards needs a merge only where the square to its left (left, up-left and
+   up-left to up linked) has not joined the same two runs already. So most runs cost no merge,
+   and only set bits are visited (``trailing_zeros``). A run's label is written 8 pixels at a
+   time; a pass clears the pixels that are not nodes.
+3. The 360 deg seam merges the first and last pixel of each row. A Map Connection can only change
+   anything between pixels in different components of the direct connections: each pair row's
+   flag "different components" is computed over the whole row (vectorised), packed, masked to the
+   connection's columns, and only the flagged pairs are tested and merged.
+4. One pass over the labels (few: runs share them) flattens the union-find forest, sums the weights
+   of each component and numbers the kept components 1..K in order of their smallest label, i.e.
+   of their first pixel in raster order. Then the labels of the pixels or of the points.
 
-Union by the smaller label keeps ``parent[l] <= l``, so one ascending pass flattens the forest and
-a component's root is its first run.
+Union by the smaller label keeps ``parent[l] <= l`` (labels are created in raster order), so one
+ascending pass flattens the forest and a component's root is the label of its first pixel. The
+link tests are the ones the labels were defined with, operation for operation (float32 squares,
+float64 cross term), so that no edge changes.
 """
 
 from __future__ import annotations
 
 import numpy as np
 from numba import njit
+from numba.cpython.unsafe.numbers import trailing_zeros  # an LLVM cttz intrinsic
 
 DISTANCE = 0  # connected when d1^2 + d2^2 - 2 cos(a) d1 d2 < param   (param = t^2)
 ANGLE = 1  # connected when atan2(d_min sin a, d_max - d_min cos a) > theta  (param = tan theta)
@@ -174,10 +181,115 @@ def _link_row(
         for c in range(out.size):
             d1 = a[c]
             d2 = b[c]
-            big = max(d1, d2)
-            small = min(d1, d2)
+            big = d1 if d1 > d2 else d2
+            small = d2 if d1 > d2 else d1
             den = big - small * cos_a
             out[c] = (d1 > 0) & (d2 > 0) & ((den <= 0.0) | (small * sin_a > param * den))
+
+
+#: multiplying 8 bytes of 0/1 by this gathers them in the top byte: byte b -> bit 56 + b
+_MAGIC_PACK = np.uint64(0x0102040810204080)
+
+
+@njit(cache=True, inline="always")
+def _pack(flags: np.ndarray, words: np.ndarray) -> None:
+    """Bit ``b`` of ``words[k]`` = ``flags[64 k + b]`` (flags: uint8 0/1, 64 per word)."""
+    f8 = flags.view(np.uint64)
+    for k in range(words.size):
+        acc = np.uint64(0)
+        for b in range(8):
+            acc |= ((f8[8 * k + b] * _MAGIC_PACK) >> np.uint64(56)) << np.uint64(8 * b)
+        words[k] = acc
+
+
+@njit(cache=True, inline="always")
+def _link_rows(
+    left: np.ndarray,
+    up: np.ndarray,
+    d: np.ndarray,
+    above: np.ndarray,
+    ch: float,
+    sh: float,
+    cv: float,
+    sv: float,
+    criterion: int,
+    param: float,
+) -> None:
+    """``left[c]``: (r, c) linked to (r, c - 1), for c >= 1; ``up[c]``: (r, c) linked to the pixel
+    above, ``above[c]``; one branch-free pass (see :func:`_link_row`)."""
+    if criterion == DISTANCE:
+        for c in range(1, d.size):
+            d1 = d[c]
+            d2 = d[c - 1]
+            d3 = above[c]
+            sq = d1 * d1
+            left[c] = (d1 > 0) & (d2 > 0) & (sq + d2 * d2 - 2.0 * ch * d1 * d2 < param)
+            up[c] = (d1 > 0) & (d3 > 0) & (sq + d3 * d3 - 2.0 * cv * d1 * d3 < param)
+    else:
+        for c in range(1, d.size):
+            d1 = d[c]
+            d2 = d[c - 1]
+            d3 = above[c]
+            big = d1 if d1 > d2 else d2
+            small = d2 if d1 > d2 else d1
+            den = big - small * ch
+            left[c] = (d1 > 0) & (d2 > 0) & ((den <= 0.0) | (small * sh > param * den))
+            big = d1 if d1 > d3 else d3
+            small = d3 if d1 > d3 else d1
+            den = big - small * cv
+            up[c] = (d1 > 0) & (d3 > 0) & ((den <= 0.0) | (small * sv > param * den))
+    d1 = d[0]
+    d3 = above[0]
+    up[0] = (d1 > 0) & (d3 > 0) & _linked(d1, d3, cv, sv, criterion, param)
+
+
+@njit(cache=True, inline="always")
+def _differ(flags: np.ndarray, a: np.ndarray, b: np.ndarray) -> None:
+    """``flags[c]``: ``a[c]`` and ``b[c]`` are nodes (label != 0) of different components;
+    branch-free, so that LLVM vectorises it."""
+    for c in range(a.size):
+        x = a[c]
+        y = b[c]
+        flags[c] = (x != y) & (x != 0) & (y != 0)
+
+
+@njit(cache=True, inline="always")
+def _join_flagged(
+    words: np.ndarray,
+    mask: np.ndarray,
+    comp: np.ndarray,
+    nodes: np.ndarray,
+    parent: np.ndarray,
+    row: int,
+    partner: int,
+    wrap: int,
+    w: int,
+    cos_a: float,
+    sin_a: float,
+    criterion: int,
+    param: float,
+) -> None:
+    """Merge the linked pairs (row + c, partner + c) for the set bits c of ``words & mask``; a
+    partner column past ``wrap`` is taken ``w`` columns back (the 360 deg seam)."""
+    one = np.uint64(1)
+    for k in range(words.size):
+        bits = words[k] & mask[k]
+        while bits:
+            c = 64 * k + np.int64(trailing_zeros(bits))
+            bits &= bits - one
+            i = row + c
+            j = partner + c - (w if c >= wrap else 0)
+            if _linked(nodes[i], nodes[j], cos_a, sin_a, criterion, param):
+                _union(parent, comp[i], comp[j])
+
+
+@njit(cache=True)
+def _lattice_mask(mask: np.ndarray, first: int, step: int, count: int) -> None:
+    """Set bits ``first + q step``, q < count, of the words ``mask`` (cleared first)."""
+    mask[:] = 0
+    for q in range(count):
+        c = first + q * step
+        mask[c >> 6] |= np.uint64(1) << np.uint64(c & 63)
 
 
 @njit(cache=True)
@@ -203,134 +315,219 @@ def _components(
     sf = skip.reshape(skip.size)  # a (1, 1) stand-in when not use_skip
     wf = weights.reshape(weights.size)
     nodes = np.empty(n, dtype=np.float32)  # node ranges, 0 elsewhere
-    labels = np.empty(n, dtype=np.int32)  # provisional labels (runs), 0 = no node
-    # at most one run per pixel; entries are written when a run starts
-    parent = np.empty(n + 1, dtype=np.int32)
+    # provisional labels, 0 = no node; a run's label is written 8 pixels at a time, so past its
+    # end until the next run or the row's clean-up overwrites it. Unsigned types for what indexes
+    # arrays: numba then leaves out the test for negative indices.
+    labels = np.empty(n + 8, dtype=np.uint32)
+    parent = np.empty(n + 1, dtype=np.uint32)  # at most one new label per pixel
     size = np.empty(n + 1, dtype=np.int64)
     parent[0] = 0
     size[0] = 0
-    left = np.zeros(w, dtype=np.bool_)  # link of (r, c) to (r, c - 1); left[0]: the seam
-    left_up = np.zeros(w, dtype=np.bool_)  # the same for row r - 1
-    up = np.zeros(w, dtype=np.bool_)  # link of (r, c) to (r - 1, c)
-    n_labels = 0
+    nw = (w + 63) // 64
+    pad = 64 * nw + 8
+    node = np.zeros(pad, dtype=np.uint8)  # (r, c) is a node
+    left = np.zeros(pad, dtype=np.uint8)  # link of (r, c) to (r, c - 1); left[0] = 0
+    up = np.zeros(pad, dtype=np.uint8)  # link of (r, c) to (r - 1, c)
+    flags = np.zeros(pad, dtype=np.uint8)  # scratch (Map Connections)
+    # the same packed in words (bit c % 64 of word c // 64), one zero word after the last
+    node_w = np.zeros(nw + 1, dtype=np.uint64)
+    left_w = np.zeros(nw + 1, dtype=np.uint64)
+    left_up_w = np.zeros(nw + 1, dtype=np.uint64)  # left_w of row r - 1
+    up_w = np.zeros(nw + 1, dtype=np.uint64)
+    starts = np.empty(w + 1, dtype=np.uint64)
+    ends = np.empty(w + 1, dtype=np.uint64)
+    acc = np.zeros(w + 1, dtype=np.int64)  # acc[c]: weight of the row's pixels before c
+    one = np.uint64(1)
+    top = np.uint64(63)
+    eight = np.uint64(8)
+    wu = np.uint64(w)
+    n_labels = np.uint64(0)
     for r in range(h):
         row = r * w
+        rowu = np.uint64(row)
         d = nodes[row : row + w]
         if use_skip:
             for c in range(w):
                 x = rf[row + c]
-                d[c] = x if (x > 0) & ~sf[row + c] else np.float32(0.0)
+                ok = (x > 0) & ~sf[row + c]
+                d[c] = x if ok else np.float32(0.0)
+                node[c] = ok
         else:
             for c in range(w):
                 x = rf[row + c]
                 d[c] = x if x > 0 else np.float32(0.0)
+                node[c] = x > 0
         ch = angles[0, r, 2]
         sh = angles[0, r, 3]
-        if w > 1:
-            _link_row(left[1:], d[1:], d[:-1], ch, sh, criterion, param)
         if r > 0:
             above = nodes[row - w : row]
-            _link_row(up, d, above, angles[0, r, 0], angles[0, r, 1], criterion, param)
-        lab = labels[row : row + w]
+            _link_rows(
+                left[:w], up[:w], d, above, ch, sh, angles[0, r, 0], angles[0, r, 1],
+                criterion, param,
+            )  # fmt: skip
+        elif w > 1:
+            _link_row(left[1:w], d[1:], d[:-1], ch, sh, criterion, param)
+        # run starts and ends, and merges with the runs above that the square to the left did
+        # not already join (a run's first pixel takes the label above it instead): word by word
+        _pack(node[: 64 * nw], node_w[:nw])
+        _pack(left[: 64 * nw], left_w[:nw])
+        _pack(up[: 64 * nw], up_w[:nw])
+        ns = 0
+        ne = 0
+        for k in range(nw):
+            base = np.uint64(64 * k)
+            nk = node_w[k]
+            lk = left_w[k]
+            bits = nk & ~lk
+            while bits:
+                starts[ns] = base + trailing_zeros(bits)
+                ns += 1
+                bits &= bits - one
+            bits = nk & ~((lk >> one) | (left_w[k + 1] << top))
+            while bits:
+                ends[ne] = base + trailing_zeros(bits) + one
+                ne += 1
+                bits &= bits - one
+        if use_weights:
+            total = np.int64(0)
+            for c in range(w):
+                acc[c] = total
+                total += wf[row + c]
+            acc[w] = total
         cur = n_labels
-        acc = np.int64(0)
-        for c in range(w):
-            if d[c] > 0:
-                if not left[c]:  # a run starts (left[0] is False: the seam comes below)
-                    cur += 1
-                    parent[cur] = cur
-                    acc = 0
-                acc += wf[row + c] if use_weights else 1
-                size[cur] = acc
-                lab[c] = cur
-                # merge with the run above, unless the square to the left already joined them
-                if up[c] and not (c > 0 and left[c] and up[c - 1] and left_up[c]):
-                    _union(parent, cur, labels[row - w + c])
+        above_row = rowu - wu if r > 0 else rowu
+        for q in range(ns):
+            a = starts[q]
+            b = ends[q]
+            if up[a]:  # the run continues the run above its first pixel: its label
+                lab_q = np.uint64(labels[above_row + a])
             else:
-                lab[c] = 0
+                cur += one
+                parent[cur] = cur
+                size[cur] = 0
+                lab_q = cur
+            size[lab_q] += acc[b] - acc[a] if use_weights else np.int64(b - a)
+            p = rowu + a
+            p_end = rowu + b
+            while True:  # 8 at a time (most runs are shorter): one predictable branch
+                labels[p] = lab_q
+                labels[p + one] = lab_q
+                labels[p + np.uint64(2)] = lab_q
+                labels[p + np.uint64(3)] = lab_q
+                labels[p + np.uint64(4)] = lab_q
+                labels[p + np.uint64(5)] = lab_q
+                labels[p + np.uint64(6)] = lab_q
+                labels[p + np.uint64(7)] = lab_q
+                p += eight
+                if p >= p_end:
+                    break
         n_labels = cur
+        lab = labels[row : row + w]
+        for c in range(w):
+            lab[c] = lab[c] if d[c] > 0 else 0
+        if r > 0:
+            carry = np.uint64(0)
+            for k in range(nw):
+                uk = up_w[k]
+                bits = uk & left_w[k] & ~(((uk << one) | carry) & left_up_w[k])
+                carry = uk >> top
+                base = rowu + np.uint64(64 * k)
+                while bits:
+                    p = base + trailing_zeros(bits)
+                    _union(parent, labels[p], labels[p - wu])
+                    bits &= bits - one
         # the 360 deg seam
         if w > 1 and d[0] > 0 and d[w - 1] > 0:
             if _linked(d[w - 1], d[0], ch, sh, criterion, param):  # one column apart
                 _union(parent, lab[w - 1], lab[0])
-        left, left_up = left_up, left
+        left_w, left_up_w = left_up_w, left_w
 
-    # Map Connections; a flat forest first, so that most pairs of one component are recognised by
-    # their labels' parents alone
+    nl = np.int64(n_labels)
+    # Map Connections: only pairs in different components of the direct connections can change
+    # anything. comp holds the root label of each pixel's direct component (0 = no node); rows
+    # of flags "different components" are computed whole (vectorised), packed and masked to the
+    # connection's columns; only the few flagged pairs are tested.
     if steps.shape[0] > 1:
-        for lab_ in range(1, n_labels + 1):
+        for lab_ in range(1, nl + 1):
             parent[lab_] = parent[parent[lab_]]
+        comp = np.empty(n, dtype=np.uint32)
+        for i in range(n):
+            comp[i] = parent[labels[i]]
+        mask_v = np.empty(nw, dtype=np.uint64)
+        mask_h = np.empty(nw, dtype=np.uint64)
+        flag_w = np.empty(nw, dtype=np.uint64)
     for m in range(1, steps.shape[0]):
         kr = steps[m, 0]
         kc = steps[m, 1]
         if lattice[m]:
             r0 = offsets[m, 0] % kr
             c0 = offsets[m, 1] % kc
+            if c0 >= w:
+                continue  # no lattice column
             last = c0 + kc * ((w - 1 - c0) // kc)
-            rstep = kr
-            cstep = kc
+            cols = (last - c0) // kc + 1
+            _lattice_mask(mask_v, c0, kc, cols)
+            _lattice_mask(mask_h, c0, kc, cols - 1)
+            for r in range(r0, h, kr):
+                row = r * w
+                if r + kr < h:
+                    below = row + kr * w
+                    _differ(flags[:w], comp[row : row + w], comp[below : below + w])
+                    _pack(flags[: 64 * nw], flag_w)
+                    _join_flagged(
+                        flag_w, mask_v, comp, nodes, parent, row, below, w, w,
+                        angles[m, r, 0], angles[m, r, 1], criterion, param,
+                    )  # fmt: skip
+                if cols > 1:
+                    # pairs (c, c + kc) of lattice columns c < last
+                    i0 = row + c0
+                    i1 = row + last - kc + 1
+                    _differ(flags[c0 : last - kc + 1], comp[i0:i1], comp[i0 + kc : i1 + kc])
+                    _pack(flags[: 64 * nw], flag_w)
+                    _join_flagged(
+                        flag_w, mask_h, comp, nodes, parent, row, row + kc, w, w,
+                        angles[m, r, 2], angles[m, r, 3], criterion, param,
+                    )  # fmt: skip
+                    # from the last lattice column across the seam to the first
+                    i = row + last
+                    j = row + c0
+                    if comp[i] != comp[j] and comp[i] != 0 and comp[j] != 0:
+                        if _linked(nodes[i], nodes[j], angles[m, r, 4], angles[m, r, 5],
+                                   criterion, param):  # fmt: skip
+                            _union(parent, comp[i], comp[j])
         else:
-            r0 = 0
-            c0 = 0
-            last = -1  # the neighbour reading wraps with the modulo
-            rstep = 1
-            cstep = 1
-        for r in range(r0, h, rstep):
-            row = r * w
-            cv = angles[m, r, 0]
-            sv = angles[m, r, 1]
-            chm = angles[m, r, 2]
-            shm = angles[m, r, 3]
-            if r + kr < h:
-                below = row + kr * w
-                for c in range(c0, w, cstep):
-                    d1 = nodes[row + c]
-                    if d1 > 0:
-                        j = below + c
-                        d2 = nodes[j]
-                        if d2 > 0 and parent[labels[row + c]] != parent[labels[j]]:
-                            if _linked(d1, d2, cv, sv, criterion, param):
-                                _union(parent, labels[row + c], labels[j])
-            if lattice[m]:
-                if last <= c0:  # one lattice column (or none): no horizontal pairs
-                    continue
-                for c in range(c0, last, cstep):
-                    d1 = nodes[row + c]
-                    if d1 > 0:
-                        j = row + c + kc
-                        d2 = nodes[j]
-                        if d2 > 0 and parent[labels[row + c]] != parent[labels[j]]:
-                            if _linked(d1, d2, chm, shm, criterion, param):
-                                _union(parent, labels[row + c], labels[j])
-                d1 = nodes[row + last]
-                d2 = nodes[row + c0]
-                if d1 > 0 and d2 > 0:
-                    if _linked(d1, d2, angles[m, r, 4], angles[m, r, 5], criterion, param):
-                        _union(parent, labels[row + last], labels[row + c0])
-            else:
-                shift = kc % w
-                if shift == 0:  # every pixel would be its own neighbour
-                    continue
-                for c in range(w):
-                    d1 = nodes[row + c]
-                    if d1 > 0:
-                        c2 = c + shift
-                        j = row + (c2 - w if c2 >= w else c2)
-                        d2 = nodes[j]
-                        if d2 > 0 and parent[labels[row + c]] != parent[labels[j]]:
-                            if _linked(d1, d2, chm, shm, criterion, param):
-                                _union(parent, labels[row + c], labels[j])
+            shift = kc % w
+            _lattice_mask(mask_v, 0, 1, w)
+            for r in range(h):
+                row = r * w
+                if r + kr < h:
+                    below = row + kr * w
+                    _differ(flags[:w], comp[row : row + w], comp[below : below + w])
+                    _pack(flags[: 64 * nw], flag_w)
+                    _join_flagged(
+                        flag_w, mask_v, comp, nodes, parent, row, below, w, w,
+                        angles[m, r, 0], angles[m, r, 1], criterion, param,
+                    )  # fmt: skip
+                if shift:  # (else every pixel would be its own neighbour)
+                    rest = w - shift
+                    _differ(flags[:rest], comp[row : row + rest], comp[row + shift : row + w])
+                    _differ(flags[rest:w], comp[row + rest : row + w], comp[row : row + shift])
+                    _pack(flags[: 64 * nw], flag_w)
+                    _join_flagged(
+                        flag_w, mask_v, comp, nodes, parent, row, row + shift, rest, w,
+                        angles[m, r, 2], angles[m, r, 3], criterion, param,
+                    )  # fmt: skip
 
     # Flatten (ascending: parent[l] <= l), sum the weights of each component at its root, then
     # number the kept roots in ascending order (raster order of their first pixel); parent[l]
     # becomes the final label of l.
-    for lab_ in range(1, n_labels + 1):
+    for lab_ in range(1, nl + 1):
         root = parent[parent[lab_]]
         parent[lab_] = root
         if root != lab_:
             size[root] += size[lab_]
     k = 0
-    for lab_ in range(1, n_labels + 1):
+    for lab_ in range(1, nl + 1):
         root = parent[lab_]
         if root == lab_:
             if size[lab_] >= min_size:
@@ -340,7 +537,7 @@ def _components(
                 parent[lab_] = 0
         else:
             parent[lab_] = parent[root]
-    return labels, parent[: n_labels + 1]
+    return labels[:n], parent[: nl + 1]
 
 
 @njit(cache=True)
@@ -399,7 +596,7 @@ def connect(
     )
     for i in range(labels.size):
         labels[i] = final[labels[i]]
-    return labels.reshape(ranges.shape)
+    return labels.view(np.int32).reshape(ranges.shape)
 
 
 @njit(cache=True)
@@ -435,9 +632,11 @@ def connect_points(
         use_weights,
     )
     out = np.empty(point_pixel.size, dtype=np.int32)
-    for j in range(point_pixel.size):
-        p = point_pixel[j]
-        out[j] = final[labels[p]] if p >= 0 else 0
+    pix = point_pixel.view(np.uint64)  # -1 becomes the largest value (unsigned: no index test)
+    n = np.uint64(labels.size)
+    for j in range(pix.size):
+        p = pix[j]
+        out[j] = final[labels[p]] if p < n else 0
     return out
 
 

@@ -26,6 +26,16 @@ class Method(Protocol):
     ) -> np.ndarray: ...
 
 
+def point_weights(image: RangeImage) -> np.ndarray | None:
+    """Points per pixel of ``image`` for the minimum cluster size, or None for one per node.
+
+    A sensor's own image (``projection == "native"``, see
+    :func:`flic_cli.range_image.from_sensor_image`) holds exactly one point per valid pixel, so the
+    kernels need not read its counts.
+    """
+    return None if image.projection == "native" else image.point_counts()
+
+
 def pixel_weights(weights: np.ndarray | None, shape: tuple[int, int]) -> np.ndarray:
     """``weights`` as the contiguous (H, W) int32 array the kernels take (None: 1 per pixel)."""
     if weights is None:

@@ -10,6 +10,7 @@ from pydantic.dataclasses import dataclass
 
 from flic_cli.config.component import STRICT
 from flic_cli.methods._unionfind import ANGLE, run_kernel
+from flic_cli.methods.base import point_weights
 from flic_cli.methods.flic import cached_sets
 from flic_cli.range_image import RangeImage
 
@@ -90,6 +91,6 @@ class Bogoslavskyi:
             float(np.tan(np.radians(self.angle_deg))),
             self.min_size,
             ground,
-            image.point_counts(),
+            point_weights(image),
             image.point_pixel,
         )

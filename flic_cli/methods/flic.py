@@ -11,6 +11,7 @@ from pydantic.dataclasses import dataclass
 
 from flic_cli.config.component import STRICT
 from flic_cli.methods._unionfind import DISTANCE, run_kernel
+from flic_cli.methods.base import point_weights
 from flic_cli.range_image import RangeImage
 
 MC_MODES = ("map", "neighbour")
@@ -272,6 +273,6 @@ class Flic:
             float(self.threshold_m) ** 2,
             self.min_size,
             ground,
-            image.point_counts(),
+            point_weights(image),
             image.point_pixel,
         )
