@@ -5,7 +5,8 @@ Loads the clusterers (``flic_cli/methods/{_unionfind,base,flic,bogoslavskyi,brid
 frame's ground mask once (not timed), then runs ``method.segment(image, points, ground)`` -- the
 stage "cluster+labels" of ``scripts/profile_stages.py``: masks, kernel and per-point labels -- with
 both implementations on every frame, alternating which goes first, checks that both give the same
-labels and prints the medians and 99th percentiles (one thread). The ``--callgrind`` mode counts
+labels and prints the medians and 99th percentiles (one thread; glibc's malloc keeps freed
+memory, as in flic's CLI, unless ``--return-freed-memory``). The ``--callgrind`` mode counts
 the instructions and (simulated) branch mispredictions of each method and implementation instead
 (``valgrind --tool=callgrind --branch-sim=yes``, instrumentation switched on only around one
 method's pass over the frames, see ``scripts/compare_stages.py``). Valgrind's CPU has no AVX-512,
@@ -35,7 +36,7 @@ from pathlib import Path
 from types import ModuleType
 from typing import Any
 
-from flic_cli.runs.environment import pin_thread_env, thread_limits
+from flic_cli.runs.environment import keep_freed_memory, pin_thread_env, thread_limits
 
 pin_thread_env(1)  # before numpy/numba are imported
 
@@ -260,8 +261,16 @@ def main() -> None:
     parser.add_argument("--repeat", type=int, default=3, help="passes over the frames")
     parser.add_argument("--frames", type=int, default=None, help="use the first N frames")
     parser.add_argument("--callgrind", action="store_true", help="count instructions instead")
+    parser.add_argument(
+        "--return-freed-memory",
+        action="store_true",
+        help="leave glibc's malloc as it is (the CLI tells it to keep freed memory: without, "
+        "every frame's arrays are fresh pages, and the page faults cost more than the kernels)",
+    )
     parser.add_argument("--count-all", action="store_true", help=argparse.SUPPRESS)
     args = parser.parse_args()
+    if not args.return_freed_memory:
+        keep_freed_memory()  # as flic's CLI does
     with thread_limits(1):
         if args.count_all:
             count_all(args)

@@ -10,6 +10,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from flic_cli.methods.bridge import walk_tables
+
 DISTANCE = 0  # connected when d1^2 + d2^2 - 2 cos(a) d1 d2 < param   (param = t^2)
 ANGLE = 1  # connected when atan2(d_min sin a, d_max - d_min cos a) > theta  (param = tan theta)
 
@@ -259,8 +261,9 @@ def _weights(weights, shape):
 
 
 def segment(method, image, ground):
-    """Per-point labels of a Flic or Bogoslavskyi method as its ``segment`` gave them before."""
-    from flic_cli.methods import Bogoslavskyi, Flic
+    """Per-point labels of a Flic, Bogoslavskyi or Bridge method as its ``segment`` gave them
+    before."""
+    from flic_cli.methods import Bogoslavskyi, Bridge, Flic
 
     mask = image.ranges > 0 if ground is None else (image.ranges > 0) & ~ground
     weights = image.point_counts()
@@ -273,6 +276,11 @@ def segment(method, image, ground):
         labels = bogoslavskyi_labels(
             image.ranges, image.elevation, method.angle_deg, method.min_size, mask, weights
         )
+    elif isinstance(method, Bridge):
+        labels = bridge_labels(
+            image.ranges, image.elevation, method.threshold_m, method.gamma_deg,
+            method.reach_px, method.min_size, mask, weights,
+        )  # fmt: skip
     else:
         raise TypeError(type(method))
     flat = labels.reshape(-1)
@@ -280,3 +288,180 @@ def segment(method, image, ground):
     has = image.point_pixel >= 0
     out[has] = flat[image.point_pixel[has]]
     return out
+
+
+# ---- Bridge (flic_cli/methods/bridge.py at 56a0905) ----
+
+
+@njit(cache=True, inline="always")
+def _walk(
+    rr: np.ndarray,
+    raw: np.ndarray,
+    w: int,
+    r: int,
+    c: int,
+    d: float,
+    tp: float,
+    tp2: float,
+    j1: int,
+    dr: int,
+    dc: int,
+    kmax: int,
+    cos_row: np.ndarray,
+    sin_row: np.ndarray,
+) -> int:
+    """Flat index of the measurement the walk from (r, c) links to, or -1 (module docstring).
+
+    ``rr`` holds the ranges of the nodes (0 elsewhere), ``raw`` every range (a pixel outside the
+    mask, e.g. ground, still shows free space). ``j1`` is the flat index of the first step (the
+    caller knows it without a modulo).
+    """
+    if kmax < 1 or d * sin_row[1] >= tp:
+        return -1
+    dq = np.float64(rr[j1])
+    if dq > 0.0:
+        if d * d + dq * dq - 2.0 * cos_row[1] * d * dq < tp2:
+            return j1
+        if dq > d:
+            return -1
+    elif raw[j1] > d:
+        return -1
+    for k in range(2, kmax + 1):
+        if d * sin_row[k] >= tp:
+            return -1
+        c2 = c + k * dc
+        if c2 < 0:
+            c2 += w
+        elif c2 >= w:
+            c2 -= w
+        j = (r + k * dr) * w + c2
+        dq = np.float64(rr[j])
+        if dq > 0.0:
+            if d * d + dq * dq - 2.0 * cos_row[k] * d * dq < tp2:
+                return j
+            if dq > d:
+                return -1
+        elif raw[j] > d:
+            return -1
+    return -1
+
+
+@njit(cache=True)
+def bridge_kernel(
+    ranges: np.ndarray,
+    mask: np.ndarray,
+    elevation: np.ndarray,
+    threshold: float,
+    sin_gamma: float,
+    reach: int,
+    min_size: int,
+    weights: np.ndarray,
+) -> np.ndarray:
+    """Connected components of the Bridge graph (module docstring), small ones dropped.
+
+    Parameters
+    ----------
+    ranges : (H, W) float32, metres, 0 = none.
+    mask : (H, W) bool, pixels that take part.
+    elevation : (H,) float64, radians.
+    threshold : threshold_m, metres.
+    sin_gamma : sin(gamma_deg).
+    reach : reach_px >= 1.
+    min_size : smallest component kept, in summed ``weights``.
+    weights : (H, W) int32 points per pixel.
+
+    Returns
+    -------
+    (H, W) int32 labels, 0 = none, 1..K in raster order of each component's first pixel.
+    """
+    h, w = ranges.shape
+    n = h * w
+    raw = ranges.reshape(n)
+    mask_flat = mask.reshape(n)
+    # the nodes' ranges (0 elsewhere); a plain loop: numba's np.where with a scalar is 20x slower
+    rr = np.empty(n, dtype=np.float32)
+    for i in range(n):
+        rr[i] = raw[i] if mask_flat[i] else np.float32(0.0)
+    m_flat = rr > 0
+    # Invariant: parent[i] <= i (a root always hangs under the smaller root), so the root of a
+    # component is its first pixel in raster order (see number_components). The union steps are
+    # written out below: numba compiles a helper that updates `parent` and returns the new root
+    # into far slower code.
+    parent = np.arange(n, dtype=np.int32)
+    cos_t, sin_t = walk_tables(elevation, w, reach)
+    k_row = min(reach, w - 1)
+    for r in range(h):
+        k_up = min(reach, r)
+        k_diag = min(k_up, k_row)
+        c_l = cos_t[0, r]
+        s_l = sin_t[0, r]
+        c_u = cos_t[1, r]
+        s_u = sin_t[1, r]
+        c_ul = cos_t[2, r]
+        s_ul = sin_t[2, r]
+        c_ur = cos_t[3, r]
+        s_ur = sin_t[3, r]
+        row = r * w
+        for c in range(w):
+            i = row + c
+            d = np.float64(rr[i])
+            if d <= 0.0:
+                continue
+            tp = max(threshold, d * sin_gamma)
+            tp2 = tp * tp
+            # The walks go to earlier pixels, except left walks across the seam, which reach the
+            # last k_row columns of the row: only there can i already have been joined.
+            root = i if c < w - k_row else _find(parent, i)
+            j_left = i - 1 if c > 0 else i + w - 1
+            j = _walk(rr, raw, w, r, c, d, tp, tp2, j_left, 0, -1, k_row, c_l, s_l)
+            inside = j == j_left
+            if j >= 0:
+                rj = _find(parent, j)
+                if rj < root:
+                    parent[root] = rj
+                    root = rj
+                elif rj > root:
+                    parent[rj] = root
+            if k_up == 0:
+                continue
+            j_up = i - w
+            j = _walk(rr, raw, w, r, c, d, tp, tp2, j_up, -1, 0, k_up, c_u, s_u)
+            if j >= 0:
+                rj = _find(parent, j)
+                if rj < root:
+                    parent[root] = rj
+                    root = rj
+                elif rj > root:
+                    parent[rj] = root
+            if inside and j == j_up:
+                continue
+            j1 = j_up - 1 if c > 0 else j_up + w - 1
+            j = _walk(rr, raw, w, r, c, d, tp, tp2, j1, -1, -1, k_diag, c_ul, s_ul)
+            if j >= 0:
+                rj = _find(parent, j)
+                if rj < root:
+                    parent[root] = rj
+                    root = rj
+                elif rj > root:
+                    parent[rj] = root
+            j1 = j_up + 1 if c < w - 1 else j_up - w + 1
+            j = _walk(rr, raw, w, r, c, d, tp, tp2, j1, -1, 1, k_diag, c_ur, s_ur)
+            if j >= 0:
+                rj = _find(parent, j)
+                if rj < root:
+                    parent[root] = rj
+                    root = rj
+                elif rj > root:
+                    parent[rj] = root
+    return number_components(parent, m_flat, weights.reshape(n), min_size).reshape(h, w)
+
+
+def bridge_labels(ranges, elevation, threshold_m, gamma_deg, reach_px, min_size, mask, weights):
+    """Bridge labels per pixel as before (``mask``: pixels that take part)."""
+    ranges = np.ascontiguousarray(ranges, dtype=np.float32)
+    mask = ranges > 0 if mask is None else np.ascontiguousarray(mask, dtype=bool)
+    return bridge_kernel(
+        ranges, mask, np.asarray(elevation, dtype=np.float64), float(threshold_m),
+        float(np.sin(np.radians(gamma_deg))), int(reach_px), int(min_size),
+        _weights(weights, ranges.shape),
+    )  # fmt: skip

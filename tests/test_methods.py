@@ -399,7 +399,7 @@ def test_kernel_gives_the_labels_of_the_previous_kernel(
 
 
 REFERENCE_METHODS = (
-    "bogoslavskyi", "flic0", "flic1", "flic6", "flic14", "flic1n", "flic6n", "flic14n",
+    "bogoslavskyi", "flic0", "flic1", "flic6", "flic14", "flic1n", "flic6n", "flic14n", "bridge",
 )  # fmt: skip
 
 
@@ -435,8 +435,8 @@ def test_segment_gives_the_labels_of_the_previous_kernel_on_the_sample(small_sam
 
 
 def test_segment_gives_the_labels_of_the_previous_kernel_on_the_shared_frames(kitti_root):
-    methods = ("bogoslavskyi", "flic0", "flic1", "flic14")
+    methods = ("bogoslavskyi", "flic0", "flic1", "flic14", "bridge")
     settings_ = [("ground", "paper"), ("ground", "own"), ("no-ground", "paper")]
-    assert _same_labels_as_before(kitti_root, methods, settings_) == 50 * 4 * 3
+    assert _same_labels_as_before(kitti_root, methods, settings_) == 50 * 5 * 3
     # the neighbour reading (slower) on a few frames
     assert _same_labels_as_before(kitti_root, ("flic14n",), settings_[:1], frames=5) == 5

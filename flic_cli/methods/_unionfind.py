@@ -293,6 +293,184 @@ def _lattice_mask(mask: np.ndarray, first: int, step: int, count: int) -> None:
 
 
 @njit(cache=True)
+def _run_buffers(n: int, w: int) -> tuple:
+    """The arrays of :func:`_label_row`: labels (n + 8, see there), parent and size (one per
+    possible label), the row's flags as bytes (node, left, up) and as words (node, left, left of
+    the row above, up), and the row's runs and weights."""
+    labels = np.empty(n + 8, dtype=np.uint32)
+    parent = np.empty(n + 1, dtype=np.uint32)  # at most one new label per pixel
+    size = np.empty(n + 1, dtype=np.int64)
+    parent[0] = 0
+    size[0] = 0
+    nw = (w + 63) // 64
+    pad = 64 * nw + 8
+    node = np.zeros(pad, dtype=np.uint8)
+    left = np.zeros(pad, dtype=np.uint8)
+    up = np.zeros(pad, dtype=np.uint8)
+    node_w = np.zeros(nw + 1, dtype=np.uint64)  # one zero word after the last
+    left_w = np.zeros(nw + 1, dtype=np.uint64)
+    left_up_w = np.zeros(nw + 1, dtype=np.uint64)
+    up_w = np.zeros(nw + 1, dtype=np.uint64)
+    starts = np.empty(w + 1, dtype=np.uint64)
+    ends = np.empty(w + 1, dtype=np.uint64)
+    acc = np.zeros(w + 1, dtype=np.int64)
+    return (
+        labels,
+        parent,
+        size,
+        node,
+        left,
+        up,
+        node_w,
+        left_w,
+        left_up_w,
+        up_w,
+        starts,
+        ends,
+        acc,
+    )
+
+
+@njit(cache=True, inline="always")
+def _label_row(
+    r: int,
+    w: int,
+    n_labels: np.uint64,
+    d: np.ndarray,
+    node: np.ndarray,
+    left: np.ndarray,
+    up: np.ndarray,
+    node_w: np.ndarray,
+    left_w: np.ndarray,
+    left_up_w: np.ndarray,
+    up_w: np.ndarray,
+    starts: np.ndarray,
+    ends: np.ndarray,
+    acc: np.ndarray,
+    labels: np.ndarray,
+    parent: np.ndarray,
+    size: np.ndarray,
+    wf: np.ndarray,
+    use_weights: bool,
+) -> np.uint64:
+    """Label the nodes of row ``r`` by runs; returns the number of labels so far.
+
+    ``d``: the row's node ranges (0 = no node); ``node[c]``: (r, c) is a node; ``left[c]``: it is
+    linked to (r, c - 1) (``left[0] = 0``: the seam is the caller's); ``up[c]``: linked to
+    (r - 1, c) (0 in row 0). ``node_w``, ``left_w``, ``up_w``: the same packed in words (written
+    here); ``left_up_w``: ``left_w`` of row r - 1 (the caller swaps the two after each row).
+
+    A run (maximal stretch of left-linked nodes) whose first pixel is linked upwards takes the
+    label above it, else a new label (parent = itself); ``size`` sums the weights per label. A
+    later upward link merges the two labels unless the square to its left (left, up-left, and
+    up-left to up) has joined them already. ``labels[row*w + c]`` gets the label of every node, 0
+    elsewhere (``labels`` has 8 entries of slack after the last pixel). ``wf``: points per pixel
+    when ``use_weights``, else every node counts 1.
+    """
+    nw = node_w.size - 1
+    one = np.uint64(1)
+    top = np.uint64(63)
+    eight = np.uint64(8)
+    row = r * w
+    rowu = np.uint64(row)
+    wu = np.uint64(w)
+    _pack(node[: 64 * nw], node_w[:nw])
+    _pack(left[: 64 * nw], left_w[:nw])
+    _pack(up[: 64 * nw], up_w[:nw])
+    # the runs' first and last pixels, word by word; only set bits are visited
+    ns = 0
+    ne = 0
+    for k in range(nw):
+        base = np.uint64(64 * k)
+        nk = node_w[k]
+        lk = left_w[k]
+        bits = nk & ~lk
+        while bits:
+            starts[ns] = base + trailing_zeros(bits)
+            ns += 1
+            bits &= bits - one
+        bits = nk & ~((lk >> one) | (left_w[k + 1] << top))
+        while bits:
+            ends[ne] = base + trailing_zeros(bits) + one
+            ne += 1
+            bits &= bits - one
+    if use_weights:
+        total = np.int64(0)
+        for c in range(w):
+            acc[c] = total
+            total += wf[row + c]
+        acc[w] = total
+    cur = n_labels
+    above_row = rowu - wu if r > 0 else rowu
+    for q in range(ns):
+        a = starts[q]
+        b = ends[q]
+        if up[a]:  # the run continues the run above its first pixel: its label
+            lab_q = np.uint64(labels[above_row + a])
+        else:
+            cur += one
+            parent[cur] = cur
+            size[cur] = 0
+            lab_q = cur
+        size[lab_q] += acc[b] - acc[a] if use_weights else np.int64(b - a)
+        p = rowu + a
+        p_end = rowu + b
+        while True:  # 8 at a time (most runs are shorter): one predictable branch
+            labels[p] = lab_q
+            labels[p + one] = lab_q
+            labels[p + np.uint64(2)] = lab_q
+            labels[p + np.uint64(3)] = lab_q
+            labels[p + np.uint64(4)] = lab_q
+            labels[p + np.uint64(5)] = lab_q
+            labels[p + np.uint64(6)] = lab_q
+            labels[p + np.uint64(7)] = lab_q
+            p += eight
+            if p >= p_end:
+                break
+    lab = labels[row : row + w]
+    for c in range(w):
+        lab[c] = lab[c] if d[c] > 0 else 0
+    if r > 0:
+        carry = np.uint64(0)
+        for k in range(nw):
+            uk = up_w[k]
+            bits = uk & left_w[k] & ~(((uk << one) | carry) & left_up_w[k])
+            carry = uk >> top
+            base = rowu + np.uint64(64 * k)
+            while bits:
+                p = base + trailing_zeros(bits)
+                _union(parent, labels[p], labels[p - wu])
+                bits &= bits - one
+    return cur
+
+
+@njit(cache=True)
+def _number(parent: np.ndarray, size: np.ndarray, n_labels: int, min_size: int) -> np.ndarray:
+    """Final label of every provisional label (``parent[:n_labels + 1]``, modified).
+
+    Flattens the forest (ascending: ``parent[l] <= l``), sums the weights of each component at
+    its root, then numbers the kept roots in ascending order (raster order of their first pixel).
+    """
+    for lab in range(1, n_labels + 1):
+        root = parent[parent[lab]]
+        parent[lab] = root
+        if root != lab:
+            size[root] += size[lab]
+    k = 0
+    for lab in range(1, n_labels + 1):
+        root = parent[lab]
+        if root == lab:
+            if size[lab] >= min_size:
+                k += 1
+                parent[lab] = k
+            else:
+                parent[lab] = 0
+        else:
+            parent[lab] = parent[root]
+    return parent[: n_labels + 1]
+
+
+@njit(cache=True)
 def _components(
     ranges: np.ndarray,
     skip: np.ndarray,
@@ -315,36 +493,13 @@ def _components(
     sf = skip.reshape(skip.size)  # a (1, 1) stand-in when not use_skip
     wf = weights.reshape(weights.size)
     nodes = np.empty(n, dtype=np.float32)  # node ranges, 0 elsewhere
-    # provisional labels, 0 = no node; a run's label is written 8 pixels at a time, so past its
-    # end until the next run or the row's clean-up overwrites it. Unsigned types for what indexes
-    # arrays: numba then leaves out the test for negative indices.
-    labels = np.empty(n + 8, dtype=np.uint32)
-    parent = np.empty(n + 1, dtype=np.uint32)  # at most one new label per pixel
-    size = np.empty(n + 1, dtype=np.int64)
-    parent[0] = 0
-    size[0] = 0
-    nw = (w + 63) // 64
-    pad = 64 * nw + 8
-    node = np.zeros(pad, dtype=np.uint8)  # (r, c) is a node
-    left = np.zeros(pad, dtype=np.uint8)  # link of (r, c) to (r, c - 1); left[0] = 0
-    up = np.zeros(pad, dtype=np.uint8)  # link of (r, c) to (r - 1, c)
-    flags = np.zeros(pad, dtype=np.uint8)  # scratch (Map Connections)
-    # the same packed in words (bit c % 64 of word c // 64), one zero word after the last
-    node_w = np.zeros(nw + 1, dtype=np.uint64)
-    left_w = np.zeros(nw + 1, dtype=np.uint64)
-    left_up_w = np.zeros(nw + 1, dtype=np.uint64)  # left_w of row r - 1
-    up_w = np.zeros(nw + 1, dtype=np.uint64)
-    starts = np.empty(w + 1, dtype=np.uint64)
-    ends = np.empty(w + 1, dtype=np.uint64)
-    acc = np.zeros(w + 1, dtype=np.int64)  # acc[c]: weight of the row's pixels before c
-    one = np.uint64(1)
-    top = np.uint64(63)
-    eight = np.uint64(8)
-    wu = np.uint64(w)
+    (
+        labels, parent, size, node, left, up, node_w, left_w, left_up_w, up_w, starts, ends, acc
+    ) = _run_buffers(n, w)  # fmt: skip
+    nw = node_w.size - 1
     n_labels = np.uint64(0)
     for r in range(h):
         row = r * w
-        rowu = np.uint64(row)
         d = nodes[row : row + w]
         if use_skip:
             for c in range(w):
@@ -367,80 +522,15 @@ def _components(
             )  # fmt: skip
         elif w > 1:
             _link_row(left[1:w], d[1:], d[:-1], ch, sh, criterion, param)
-        # run starts and ends, and merges with the runs above that the square to the left did
-        # not already join (a run's first pixel takes the label above it instead): word by word
-        _pack(node[: 64 * nw], node_w[:nw])
-        _pack(left[: 64 * nw], left_w[:nw])
-        _pack(up[: 64 * nw], up_w[:nw])
-        ns = 0
-        ne = 0
-        for k in range(nw):
-            base = np.uint64(64 * k)
-            nk = node_w[k]
-            lk = left_w[k]
-            bits = nk & ~lk
-            while bits:
-                starts[ns] = base + trailing_zeros(bits)
-                ns += 1
-                bits &= bits - one
-            bits = nk & ~((lk >> one) | (left_w[k + 1] << top))
-            while bits:
-                ends[ne] = base + trailing_zeros(bits) + one
-                ne += 1
-                bits &= bits - one
-        if use_weights:
-            total = np.int64(0)
-            for c in range(w):
-                acc[c] = total
-                total += wf[row + c]
-            acc[w] = total
-        cur = n_labels
-        above_row = rowu - wu if r > 0 else rowu
-        for q in range(ns):
-            a = starts[q]
-            b = ends[q]
-            if up[a]:  # the run continues the run above its first pixel: its label
-                lab_q = np.uint64(labels[above_row + a])
-            else:
-                cur += one
-                parent[cur] = cur
-                size[cur] = 0
-                lab_q = cur
-            size[lab_q] += acc[b] - acc[a] if use_weights else np.int64(b - a)
-            p = rowu + a
-            p_end = rowu + b
-            while True:  # 8 at a time (most runs are shorter): one predictable branch
-                labels[p] = lab_q
-                labels[p + one] = lab_q
-                labels[p + np.uint64(2)] = lab_q
-                labels[p + np.uint64(3)] = lab_q
-                labels[p + np.uint64(4)] = lab_q
-                labels[p + np.uint64(5)] = lab_q
-                labels[p + np.uint64(6)] = lab_q
-                labels[p + np.uint64(7)] = lab_q
-                p += eight
-                if p >= p_end:
-                    break
-        n_labels = cur
-        lab = labels[row : row + w]
-        for c in range(w):
-            lab[c] = lab[c] if d[c] > 0 else 0
-        if r > 0:
-            carry = np.uint64(0)
-            for k in range(nw):
-                uk = up_w[k]
-                bits = uk & left_w[k] & ~(((uk << one) | carry) & left_up_w[k])
-                carry = uk >> top
-                base = rowu + np.uint64(64 * k)
-                while bits:
-                    p = base + trailing_zeros(bits)
-                    _union(parent, labels[p], labels[p - wu])
-                    bits &= bits - one
+        n_labels = _label_row(
+            r, w, n_labels, d, node, left, up, node_w, left_w, left_up_w, up_w, starts, ends, acc,
+            labels, parent, size, wf, use_weights,
+        )  # fmt: skip
+        left_w, left_up_w = left_up_w, left_w
         # the 360 deg seam
         if w > 1 and d[0] > 0 and d[w - 1] > 0:
             if _linked(d[w - 1], d[0], ch, sh, criterion, param):  # one column apart
-                _union(parent, lab[w - 1], lab[0])
-        left_w, left_up_w = left_up_w, left_w
+                _union(parent, labels[row + w - 1], labels[row])
 
     nl = np.int64(n_labels)
     # Map Connections: only pairs in different components of the direct connections can change
@@ -456,6 +546,7 @@ def _components(
         mask_v = np.empty(nw, dtype=np.uint64)
         mask_h = np.empty(nw, dtype=np.uint64)
         flag_w = np.empty(nw, dtype=np.uint64)
+        flags = np.zeros(64 * nw + 8, dtype=np.uint8)
     for m in range(1, steps.shape[0]):
         kr = steps[m, 0]
         kc = steps[m, 1]
@@ -518,26 +609,28 @@ def _components(
                         angles[m, r, 2], angles[m, r, 3], criterion, param,
                     )  # fmt: skip
 
-    # Flatten (ascending: parent[l] <= l), sum the weights of each component at its root, then
-    # number the kept roots in ascending order (raster order of their first pixel); parent[l]
-    # becomes the final label of l.
-    for lab_ in range(1, nl + 1):
-        root = parent[parent[lab_]]
-        parent[lab_] = root
-        if root != lab_:
-            size[root] += size[lab_]
-    k = 0
-    for lab_ in range(1, nl + 1):
-        root = parent[lab_]
-        if root == lab_:
-            if size[lab_] >= min_size:
-                k += 1
-                parent[lab_] = k
-            else:
-                parent[lab_] = 0
-        else:
-            parent[lab_] = parent[root]
-    return labels[:n], parent[: nl + 1]
+    return labels[:n], _number(parent, size, nl, min_size)
+
+
+@njit(cache=True, inline="always")
+def pixel_output(labels: np.ndarray, final: np.ndarray) -> np.ndarray:
+    """(N,) int32 final label of every pixel (``labels``: uint32 provisional ones, overwritten)."""
+    for i in range(labels.size):
+        labels[i] = final[labels[i]]
+    return labels.view(np.int32)
+
+
+@njit(cache=True, inline="always")
+def point_output(labels: np.ndarray, final: np.ndarray, point_pixel: np.ndarray) -> np.ndarray:
+    """(N_points,) int32 final label of every point: that of its pixel, 0 where ``point_pixel``
+    is negative (a point without a pixel)."""
+    out = np.empty(point_pixel.size, dtype=np.int32)
+    pix = point_pixel.view(np.uint64)  # -1 becomes the largest value (unsigned: no index test)
+    n = np.uint64(labels.size)
+    for j in range(pix.size):
+        p = pix[j]
+        out[j] = final[labels[p]] if p < n else 0
+    return out
 
 
 @njit(cache=True)
@@ -594,9 +687,7 @@ def connect(
         weights,
         use_weights,
     )
-    for i in range(labels.size):
-        labels[i] = final[labels[i]]
-    return labels.view(np.int32).reshape(ranges.shape)
+    return pixel_output(labels, final).reshape(ranges.shape)
 
 
 @njit(cache=True)
@@ -631,13 +722,7 @@ def connect_points(
         weights,
         use_weights,
     )
-    out = np.empty(point_pixel.size, dtype=np.int32)
-    pix = point_pixel.view(np.uint64)  # -1 becomes the largest value (unsigned: no index test)
-    n = np.uint64(labels.size)
-    for j in range(pix.size):
-        p = pix[j]
-        out[j] = final[labels[p]] if p < n else 0
-    return out
+    return point_output(labels, final, point_pixel)
 
 
 #: (elevation bytes, width, sets key, criterion) -> angle_tables; cleared when full
@@ -658,6 +743,40 @@ def cached_angles(
             _ANGLES.clear()
         out = _ANGLES[k] = angle_tables(elevation, width, *sets, criterion)
     return out
+
+
+def kernel_inputs(
+    ranges: np.ndarray,
+    elevation: np.ndarray,
+    skip: np.ndarray | None,
+    weights: np.ndarray | None,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, bool, np.ndarray, bool]:
+    """The kernels' arguments: contiguous float32 ranges, float64 elevation, the mask of pixels
+    left out and the weights as contiguous arrays (a small stand-in when None) with the flags
+    ``use_skip`` and ``use_weights``; shapes are checked."""
+    ranges = np.ascontiguousarray(ranges, dtype=np.float32)
+    shape = ranges.shape
+    elevation = np.ascontiguousarray(elevation, dtype=np.float64)
+    if elevation.shape != (shape[0],):
+        raise ValueError(f"elevation has shape {elevation.shape}, the image {shape[0]} rows")
+    use_skip = skip is not None
+    if use_skip:
+        skip = np.ascontiguousarray(skip, dtype=np.bool_)
+        if skip.shape != shape:
+            raise ValueError(f"the mask has shape {skip.shape}, the image {shape}")
+    use_weights = weights is not None
+    if use_weights:
+        weights = np.ascontiguousarray(weights, dtype=np.int32)
+        if weights.shape != shape:
+            raise ValueError(f"weights have shape {weights.shape}, the image {shape}")
+    return (
+        ranges,
+        elevation,
+        skip if use_skip else _NO_ARRAY_2D,
+        use_skip,
+        weights if use_weights else _NO_WEIGHTS,
+        use_weights,
+    )
 
 
 def run_kernel(
@@ -686,76 +805,22 @@ def run_kernel(
     weights : (H, W) int, points per pixel, or None (1 per pixel).
     point_pixel : (N,) int64 pixel of every point (-1: none), or None for per-pixel labels.
     """
-    ranges = np.ascontiguousarray(ranges, dtype=np.float32)
-    shape = ranges.shape
-    elevation = np.ascontiguousarray(elevation, dtype=np.float64)
-    if elevation.shape != (shape[0],):
-        raise ValueError(f"elevation has shape {elevation.shape}, the image {shape[0]} rows")
-    use_skip = skip is not None
-    if use_skip:
-        skip = np.ascontiguousarray(skip, dtype=np.bool_)
-        if skip.shape != shape:
-            raise ValueError(f"the mask has shape {skip.shape}, the image {shape}")
-    use_weights = weights is not None
-    if use_weights:
-        weights = np.ascontiguousarray(weights, dtype=np.int32)
-        if weights.shape != shape:
-            raise ValueError(f"weights have shape {weights.shape}, the image {shape}")
-    angles = cached_angles(elevation, shape[1], sets, key, criterion)
+    ranges, elevation, skip, use_skip, weights, use_weights = kernel_inputs(
+        ranges, elevation, skip, weights
+    )
+    angles = cached_angles(elevation, ranges.shape[1], sets, key, criterion)
     args = (
         ranges,
-        skip if use_skip else _NO_ARRAY_2D,
+        skip,
         use_skip,
         *sets,
         angles,
         criterion,
         float(param),
         int(min_size),
-        weights if use_weights else _NO_WEIGHTS,
+        weights,
         use_weights,
     )
     if point_pixel is None:
         return connect(*args)
     return connect_points(*args, np.ascontiguousarray(point_pixel, dtype=np.int64))
-
-
-@njit(cache=True)
-def number_components(
-    parent: np.ndarray, m_flat: np.ndarray, w_flat: np.ndarray, min_size: int
-) -> np.ndarray:
-    """Labels from a union-find forest whose roots are their component's first member.
-
-    Parameters
-    ----------
-    parent : (N,) int32 forest with ``parent[i] <= i`` (modified: flattened).
-    m_flat : (N,) bool, the members (others get label 0).
-    w_flat : (N,) int32 weight of each member (points per pixel).
-    min_size : components whose weights sum to less are dropped.
-
-    Returns
-    -------
-    (N,) int32 labels 1..K numbered in order of each component's first member, 0 = none.
-    """
-    n = parent.size
-    # Flatten (ascending order, see the invariant) and sum the weights in one pass.
-    size = np.zeros(n, dtype=np.int64)
-    for i in range(n):
-        if m_flat[i]:
-            root = parent[parent[i]]
-            parent[i] = root
-            size[root] += w_flat[i]
-    # Number the kept components in order of their first member; size[root] < 0 marks a
-    # numbered root (-label).
-    labels = np.zeros(n, dtype=np.int32)
-    k = 0
-    for i in range(n):
-        if m_flat[i]:
-            root = parent[i]
-            s = size[root]
-            if s < 0:
-                labels[i] = -s
-            elif s >= min_size:
-                k += 1
-                size[root] = -k
-                labels[i] = k
-    return labels

@@ -36,16 +36,6 @@ def point_weights(image: RangeImage) -> np.ndarray | None:
     return None if image.projection == "native" else image.point_counts()
 
 
-def pixel_weights(weights: np.ndarray | None, shape: tuple[int, int]) -> np.ndarray:
-    """``weights`` as the contiguous (H, W) int32 array the kernels take (None: 1 per pixel)."""
-    if weights is None:
-        return np.ones(shape, dtype=np.int32)
-    weights = np.ascontiguousarray(weights, dtype=np.int32)
-    if weights.shape != tuple(shape):
-        raise ValueError(f"weights have shape {weights.shape}, the image {tuple(shape)}")
-    return weights
-
-
 def drop_small(labels: np.ndarray, min_size: int, weights: np.ndarray | None = None) -> np.ndarray:
     """Relabel clusters 1..K in order of first appearance, dropping those under ``min_size``.
 
