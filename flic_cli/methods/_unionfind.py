@@ -243,7 +243,7 @@ def _link_rows(
     up[0] = (d1 > 0) & (d3 > 0) & _linked(d1, d3, cv, sv, criterion, param)
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _differ(flags: np.ndarray, a: np.ndarray, b: np.ndarray) -> None:
     """``flags[c]``: ``a[c]`` and ``b[c]`` are nodes (label != 0) of different components;
     branch-free, so that LLVM vectorises it."""
@@ -253,7 +253,7 @@ def _differ(flags: np.ndarray, a: np.ndarray, b: np.ndarray) -> None:
         flags[c] = (x != y) & (x != 0) & (y != 0)
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _join_flagged(
     words: np.ndarray,
     mask: np.ndarray,
