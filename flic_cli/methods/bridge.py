@@ -245,11 +245,13 @@ def _bridge_components(
     """Provisional label of every pixel (0 = no node) and the final label of each provisional
     label (0 = dropped): the connected components of the Bridge graph (module docstring).
 
-    The first step of the left and the upward walk of every pixel is decided for a whole row at
-    once (:func:`_first_steps`); the links found there are those of FLIC's direct connections, so
-    the rows are labelled by runs like FLIC's (:func:`flic_cli.methods._unionfind._label_row`).
-    Only the nodes whose walks go on, or that walk diagonally (not linked both left and up at the
-    first step), are then walked one by one, and their links merge labels.
+    The first step of every walk (left, up, up-left, up-right) is decided for a whole row at once
+    (:func:`_first_steps`: link, stop or go on). The first-step links left and up are FLIC's
+    direct connections with Bridge's test, so the rows are labelled by runs like FLIC's
+    (:func:`flic_cli.methods._unionfind._label_row`); first-step diagonal links of the nodes not
+    inside a surface (linked both left and up) merge labels from packed flags; the walks that go
+    on are advanced step by step by :func:`_walk_row`. The labels are those of the pixel-by-pixel
+    union-find this replaced (``tests/reference_kernels.py``).
     """
     h, w = ranges.shape
     n = h * w
