@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+import reference_kernels  # tests/reference_kernels.py: the kernels before issue 11's rework
 from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 from scipy.sparse import coo_matrix
@@ -118,6 +119,30 @@ def test_bridge_equals_components_of_its_graph(scene, threshold, gamma, reach, m
     expected = components(ranges.shape, node, edges, weights, min_size)
     got = bridge_labels(ranges, elevation, threshold, gamma, reach, min_size, mask, weights)
     np.testing.assert_array_equal(got, expected)
+
+
+@settings(max_examples=300, deadline=None)
+@given(
+    scene=scenes(),
+    threshold=st.floats(0.2, 3.0),
+    gamma=st.sampled_from([0.0, 1.0, 2.0, 5.0]),
+    reach=st.integers(1, 20),
+    min_size=st.integers(1, 10),
+    masked=st.booleans(),
+    weighted=st.booleans(),
+)
+def test_bridge_gives_the_labels_of_the_previous_kernel(
+    scene, threshold, gamma, reach, min_size, masked, weighted
+):
+    ranges, elevation, mask, weights = scene
+    mask = mask if masked else None
+    weights = weights if weighted else None
+    np.testing.assert_array_equal(
+        bridge_labels(ranges, elevation, threshold, gamma, reach, min_size, mask, weights),
+        reference_kernels.bridge_labels(
+            ranges, elevation, threshold, gamma, reach, min_size, mask, weights
+        ),
+    )
 
 
 @settings(max_examples=200, deadline=None)

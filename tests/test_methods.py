@@ -2,8 +2,11 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
+import reference_kernels  # tests/reference_kernels.py: the kernels before issue 11's rework
 from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 from scipy.sparse import coo_matrix
@@ -358,3 +361,83 @@ def test_dbscan_backend_is_validated():
 
     with pytest.raises(ValueError, match="backend"):
         Dbscan(backend="cuda")
+
+
+# ---- the reworked kernel against the previous one (tests/reference_kernels.py) ---------------
+
+
+@settings(max_examples=300, deadline=None)
+@given(
+    image=range_images(),
+    threshold=st.floats(0.3, 3.0),
+    angle=st.floats(2.0, 60.0),
+    maps=maps_strategy,
+    mc_mode=st.sampled_from(["map", "neighbour"]),
+    min_size=st.integers(1, 12),
+    data=st.data(),
+)
+def test_kernel_gives_the_labels_of_the_previous_kernel(
+    image, threshold, angle, maps, mc_mode, min_size, data
+):
+    ranges, elevation = image
+    weights = data.draw(pixel_weights(ranges.shape))
+    seed = data.draw(st.integers(0, 2**32 - 1))
+    mask = data.draw(st.sampled_from([None, "ground"]))
+    if mask == "ground":  # a ground-like mask: some pixels with a range left out
+        mask = np.random.default_rng(seed).random(ranges.shape) > 0.3
+    nodes = ranges > 0 if mask is None else mask & (ranges > 0)
+    maps = tuple(m[:2] if m[2] == m[3] == 0 else m for m in maps)
+    np.testing.assert_array_equal(
+        flic_labels(ranges, elevation, threshold, min_size, maps, mc_mode, mask, weights),
+        reference_kernels.flic_labels(
+            ranges, elevation, threshold, min_size, maps, mc_mode, nodes, weights
+        ),
+    )
+    np.testing.assert_array_equal(
+        bogoslavskyi_labels(ranges, elevation, angle, min_size, mask, weights),
+        reference_kernels.bogoslavskyi_labels(ranges, elevation, angle, min_size, nodes, weights),
+    )
+
+
+REFERENCE_METHODS = (
+    "bogoslavskyi", "flic0", "flic1", "flic6", "flic14", "flic1n", "flic6n", "flic14n", "bridge",
+)  # fmt: skip
+
+
+def _same_labels_as_before(data: Path, methods, settings_, frames=None) -> int:
+    """Compare every method's segment() with the previous kernels on the frames of ``data``;
+    returns the number of comparisons."""
+    from flic_cli.config import load_config
+    from flic_cli.io import open_dataset
+    from flic_cli.runs.pipeline import build_segmenter, prepare
+
+    cfg = load_config()
+    ds = open_dataset(data)
+    done = 0
+    for setting, remover in settings_:
+        segs = [build_segmenter(cfg, name, setting, remover) for name in methods]
+        for ref in ds.refs()[:frames]:
+            prep = prepare(ds.load(ref), setting, cfg.projection)
+            for seg in segs:
+                ground = seg.extract_ground(prep.image, prep.points)
+                got = seg.method.segment(prep.image, prep.points, ground)
+                want = reference_kernels.segment(seg.method, prep.image, ground)
+                np.testing.assert_array_equal(got, want, err_msg=f"{seg.name} {setting} {ref}")
+                done += 1
+    return done
+
+
+def test_segment_gives_the_labels_of_the_previous_kernel_on_the_sample(small_sample):
+    for data in (small_sample.moosmann_log, small_sample.kitti_root):
+        settings_ = [("ground", "paper"), ("ground", "own")]
+        if data == small_sample.kitti_root:
+            settings_.append(("no-ground", "paper"))
+        assert _same_labels_as_before(data, REFERENCE_METHODS, settings_) > 0
+
+
+def test_segment_gives_the_labels_of_the_previous_kernel_on_the_shared_frames(kitti_root):
+    methods = ("bogoslavskyi", "flic0", "flic1", "flic14", "bridge")
+    settings_ = [("ground", "paper"), ("ground", "own"), ("no-ground", "paper")]
+    assert _same_labels_as_before(kitti_root, methods, settings_) == 50 * 5 * 3
+    # the neighbour reading (slower) on a few frames
+    assert _same_labels_as_before(kitti_root, ("flic14n",), settings_[:1], frames=5) == 5

@@ -26,14 +26,14 @@ class Method(Protocol):
     ) -> np.ndarray: ...
 
 
-def pixel_weights(weights: np.ndarray | None, shape: tuple[int, int]) -> np.ndarray:
-    """``weights`` as the contiguous (H, W) int32 array the kernels take (None: 1 per pixel)."""
-    if weights is None:
-        return np.ones(shape, dtype=np.int32)
-    weights = np.ascontiguousarray(weights, dtype=np.int32)
-    if weights.shape != tuple(shape):
-        raise ValueError(f"weights have shape {weights.shape}, the image {tuple(shape)}")
-    return weights
+def point_weights(image: RangeImage) -> np.ndarray | None:
+    """Points per pixel of ``image`` for the minimum cluster size, or None for one per node.
+
+    A sensor's own image (``projection == "native"``, see
+    :func:`flic_cli.range_image.from_sensor_image`) holds exactly one point per valid pixel, so the
+    kernels need not read its counts.
+    """
+    return None if image.projection == "native" else image.point_counts()
 
 
 def drop_small(labels: np.ndarray, min_size: int, weights: np.ndarray | None = None) -> np.ndarray:

@@ -9,10 +9,13 @@ from pydantic import Field
 from pydantic.dataclasses import dataclass
 
 from flic_cli.config.component import STRICT
-from flic_cli.methods._unionfind import ANGLE, connect_labels
-from flic_cli.methods.base import pixel_weights
-from flic_cli.methods.flic import connection_sets
+from flic_cli.methods._unionfind import ANGLE, run_kernel
+from flic_cli.methods.base import point_weights
+from flic_cli.methods.flic import cached_sets
 from flic_cli.range_image import RangeImage
+
+#: the key of the direct connections alone (see :func:`flic_cli.methods.flic.cached_sets`)
+DIRECT = ((), "map")
 
 
 def bogoslavskyi_beta(d1: np.ndarray, d2: np.ndarray, alpha: np.ndarray) -> np.ndarray:
@@ -41,28 +44,24 @@ def bogoslavskyi_labels(
     elevation : (H,) radians.
     angle_deg : the threshold theta, degrees (10 in the original).
     min_size : smallest cluster, points (the sum of its pixels' ``weights``).
-    mask : pixels to cluster (default: valid ones).
+    mask : pixels to cluster (default: valid ones; a pixel without a range is never clustered).
     weights : (H, W) int, points per pixel (default 1: the minimum size counts pixels).
 
     Returns
     -------
     (H, W) int32 labels, 0 = none.
     """
-    ranges = np.ascontiguousarray(ranges, dtype=np.float32)
-    if mask is None:
-        mask = ranges > 0
-    steps, offsets, lattice = connection_sets(())
-    return connect_labels(
+    skip = None if mask is None else ~np.asarray(mask, dtype=bool)
+    return run_kernel(
         ranges,
-        np.ascontiguousarray(mask),
-        np.asarray(elevation, dtype=np.float64),
-        steps,
-        offsets,
-        lattice,
+        elevation,
+        cached_sets((), "map"),
+        DIRECT,
         ANGLE,
         float(np.tan(np.radians(angle_deg))),
-        int(min_size),
-        pixel_weights(weights, ranges.shape),
+        min_size,
+        skip,
+        weights,
     )
 
 
@@ -83,13 +82,15 @@ class Bogoslavskyi:
     def segment(
         self, image: RangeImage, points: np.ndarray, ground: np.ndarray | None
     ) -> np.ndarray:
-        mask = image.ranges > 0 if ground is None else (image.ranges > 0) & ~ground
-        labels = bogoslavskyi_labels(
+        return run_kernel(
             image.ranges,
             image.elevation,
-            self.angle_deg,
+            cached_sets((), "map"),
+            DIRECT,
+            ANGLE,
+            float(np.tan(np.radians(self.angle_deg))),
             self.min_size,
-            mask,
-            image.point_counts(),
+            ground,
+            point_weights(image),
+            image.point_pixel,
         )
-        return image.point_labels(labels)

@@ -55,8 +55,18 @@ from pydantic import Field
 from pydantic.dataclasses import dataclass
 
 from flic_cli.config.component import STRICT
-from flic_cli.methods._unionfind import _find, number_components
-from flic_cli.methods.base import pixel_weights
+from flic_cli.methods._unionfind import (
+    _label_row,
+    _number,
+    _pack,
+    _run_buffers,
+    _union,
+    kernel_inputs,
+    pixel_output,
+    point_output,
+    trailing_zeros,
+)
+from flic_cli.methods.base import point_weights
 from flic_cli.range_image import RangeImage
 
 #: Walk directions (row step, column step): left, up, up-left, up-right (the order of the tables
@@ -110,167 +120,330 @@ def walk_tables(elevation: np.ndarray, width: int, reach: int) -> tuple[np.ndarr
     return cos_t, sin_t
 
 
-@njit(cache=True, inline="always")
-def _walk(
-    rr: np.ndarray,
-    raw: np.ndarray,
-    w: int,
+@njit(cache=True)
+def _walk_row(
     r: int,
-    c: int,
-    d: float,
-    tp: float,
-    tp2: float,
-    j1: int,
-    dr: int,
-    dc: int,
-    kmax: int,
-    cos_row: np.ndarray,
-    sin_row: np.ndarray,
-) -> int:
-    """Flat index of the measurement the walk from (r, c) links to, or -1 (module docstring).
+    w: int,
+    on_w: np.ndarray,
+    nodes: np.ndarray,
+    raw: np.ndarray,
+    labels: np.ndarray,
+    parent: np.ndarray,
+    cos_t: np.ndarray,
+    sin_t: np.ndarray,
+    threshold: float,
+    sin_gamma: float,
+    k_row: int,
+    k_up: int,
+    walks: np.ndarray,
+    link_c: np.ndarray,
+    link_q: np.ndarray,
+) -> None:
+    """The walks of row ``r`` past their first steps (module docstring); every link found merges
+    two labels.
 
-    ``rr`` holds the ranges of the nodes (0 elsewhere), ``raw`` every range (a pixel outside the
-    mask, e.g. ground, still shows free space). ``j1`` is the flat index of the first step (the
-    caller knows it without a modulo).
+    ``on_w[di]``: packed flags of the nodes whose walk in direction ``di`` (left, up, up-left,
+    up-right) goes on past its first step. ``nodes``: the node ranges (0 elsewhere), ``raw``:
+    every range (a pixel outside the mask, e.g. ground, still shows free space), both flat.
+    The walks of one direction advance together, step by step, over a list of the walks still
+    going (``walks``); each step's tests are evaluated without a branch and the list is
+    compacted, so the only branches are the loops'. ``link_c``, ``link_q``: scratch for the links
+    (column of p, flat index of q).
     """
-    if kmax < 1 or d * sin_row[1] >= tp:
-        return -1
-    dq = np.float64(rr[j1])
-    if dq > 0.0:
-        if d * d + dq * dq - 2.0 * cos_row[1] * d * dq < tp2:
-            return j1
-        if dq > d:
-            return -1
-    elif raw[j1] > d:
-        return -1
-    for k in range(2, kmax + 1):
-        if d * sin_row[k] >= tp:
-            return -1
-        c2 = c + k * dc
-        if c2 < 0:
-            c2 += w
-        elif c2 >= w:
-            c2 -= w
-        j = (r + k * dr) * w + c2
-        dq = np.float64(rr[j])
-        if dq > 0.0:
-            if d * d + dq * dq - 2.0 * cos_row[k] * d * dq < tp2:
-                return j
-            if dq > d:
-                return -1
-        elif raw[j] > d:
-            return -1
-    return -1
+    one = np.uint64(1)
+    row = r * w
+    k_diag = min(k_up, k_row)
+    for di in range(4):
+        dr = 0 if di == 0 else -1
+        dc = -1 if di == 0 or di == 2 else (0 if di == 1 else 1)
+        kmax = k_row if di == 0 else (k_up if di == 1 else k_diag)
+        if kmax < 2:
+            continue
+        m = 0
+        for k in range(on_w.shape[1]):
+            bits = on_w[di, k]
+            while bits:
+                walks[m] = 64 * k + np.int64(trailing_zeros(bits))
+                m += 1
+                bits &= bits - one
+        n_links = 0
+        for step in range(2, kmax + 1):
+            if m == 0:
+                break
+            cos_k = cos_t[di, r, step]
+            sin_k = sin_t[di, r, step]
+            row_q = (r + step * dr) * w
+            going = 0
+            for t in range(m):
+                c = walks[t]
+                d = np.float64(nodes[row + c])
+                tp = max(threshold, d * sin_gamma)
+                tp2 = tp * tp
+                c2 = c + step * dc
+                c2 += w if c2 < 0 else 0
+                c2 -= w if c2 >= w else 0
+                q = row_q + c2
+                dq = np.float64(nodes[q])
+                # the bound (nothing from here on can be linked), a link, free space beside p (a
+                # farther node, or a range beyond p outside the mask)
+                bound = d * sin_k >= tp
+                linked = (dq > 0.0) & (d * d + dq * dq - 2.0 * cos_k * d * dq < tp2)
+                free = (dq > d) | ((dq <= 0.0) & (raw[q] > d))
+                link_c[n_links] = c
+                link_q[n_links] = q
+                n_links += np.int64(linked) * (1 - np.int64(bound))
+                walks[going] = c
+                going += 1 - np.int64(bound | linked | free)
+            m = going
+        for t in range(n_links):
+            _union(parent, labels[row + link_c[t]], labels[link_q[t]])
+
+
+@njit(cache=True, inline="always")
+def _first_steps(
+    link: np.ndarray,
+    on: np.ndarray,
+    d: np.ndarray,
+    dq: np.ndarray,
+    rq: np.ndarray,
+    threshold: float,
+    sin_gamma: float,
+    cos_1: float,
+    sin_1: float,
+    further: bool,
+) -> None:
+    """The first step of every walk of a row, branch-free (LLVM vectorises it): ``link[c]``: the
+    walk from node ``d[c]`` links to the node ``dq[c]`` one step away; ``on[c]``: it goes on to
+    the next step (a hole or a nearer occluder there, and ``further``: the walk has more steps).
+    ``rq``: the raw ranges one step away. Operations as in :func:`_walk_row`."""
+    for c in range(d.size):
+        dd = np.float64(d[c])
+        q = np.float64(dq[c])
+        t = dd * sin_gamma
+        tp = threshold if threshold >= t else t
+        ok = (dd > 0.0) & (dd * sin_1 < tp)
+        linked = ok & (q > 0.0) & (dd * dd + q * q - 2.0 * cos_1 * dd * q < tp * tp)
+        free = ((q > 0.0) & (q > dd)) | ((q <= 0.0) & (rq[c] > dd))
+        link[c] = linked
+        on[c] = ok & ~linked & ~free & further
 
 
 @njit(cache=True)
-def bridge_kernel(
+def _bridge_components(
     ranges: np.ndarray,
-    mask: np.ndarray,
-    elevation: np.ndarray,
+    skip: np.ndarray,
+    use_skip: bool,
+    cos_t: np.ndarray,
+    sin_t: np.ndarray,
     threshold: float,
     sin_gamma: float,
     reach: int,
     min_size: int,
     weights: np.ndarray,
-) -> np.ndarray:
-    """Connected components of the Bridge graph (module docstring), small ones dropped.
+    use_weights: bool,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Provisional label of every pixel (0 = no node) and the final label of each provisional
+    label (0 = dropped): the connected components of the Bridge graph (module docstring).
 
-    Parameters
-    ----------
-    ranges : (H, W) float32, metres, 0 = none.
-    mask : (H, W) bool, pixels that take part.
-    elevation : (H,) float64, radians.
-    threshold : threshold_m, metres.
-    sin_gamma : sin(gamma_deg).
-    reach : reach_px >= 1.
-    min_size : smallest component kept, in summed ``weights``.
-    weights : (H, W) int32 points per pixel.
-
-    Returns
-    -------
-    (H, W) int32 labels, 0 = none, 1..K in raster order of each component's first pixel.
+    The first step of every walk (left, up, up-left, up-right) is decided for a whole row at once
+    (:func:`_first_steps`: link, stop or go on). The first-step links left and up are FLIC's
+    direct connections with Bridge's test, so the rows are labelled by runs like FLIC's
+    (:func:`flic_cli.methods._unionfind._label_row`); first-step diagonal links of the nodes not
+    inside a surface (linked both left and up) merge labels from packed flags; the walks that go
+    on are advanced step by step by :func:`_walk_row`. The labels are those of the pixel-by-pixel
+    union-find this replaced (``tests/reference_kernels.py``).
     """
     h, w = ranges.shape
     n = h * w
-    raw = ranges.reshape(n)
-    mask_flat = mask.reshape(n)
-    # the nodes' ranges (0 elsewhere); a plain loop: numba's np.where with a scalar is 20x slower
-    rr = np.empty(n, dtype=np.float32)
-    for i in range(n):
-        rr[i] = raw[i] if mask_flat[i] else np.float32(0.0)
-    m_flat = rr > 0
-    # Invariant: parent[i] <= i (a root always hangs under the smaller root), so the root of a
-    # component is its first pixel in raster order (see number_components). The union steps are
-    # written out below: numba compiles a helper that updates `parent` and returns the new root
-    # into far slower code.
-    parent = np.arange(n, dtype=np.int32)
-    cos_t, sin_t = walk_tables(elevation, w, reach)
+    rf = ranges.reshape(n)
+    sf = skip.reshape(skip.size)  # a (1, 1) stand-in when not use_skip
+    wf = weights.reshape(weights.size)
+    nodes = np.empty(n, dtype=np.float32)  # node ranges, 0 elsewhere
+    (
+        labels, parent, size, node, left, up, node_w, left_w, left_up_w, up_w, starts, ends, acc
+    ) = _run_buffers(n, w)  # fmt: skip
+    nw = node_w.size - 1
+    pad = 64 * nw + 8
+    left_on = np.zeros(pad, dtype=np.uint8)  # the left walk goes past its first step
+    up_on = np.zeros(pad, dtype=np.uint8)
+    ul = np.zeros(pad, dtype=np.uint8)  # the first step up-left links
+    ul_on = np.zeros(pad, dtype=np.uint8)  # ... or goes on
+    ur = np.zeros(pad, dtype=np.uint8)  # the same up-right
+    ur_on = np.zeros(pad, dtype=np.uint8)
+    ul_link = np.zeros(pad, dtype=np.uint8)  # a diagonal first step's link to merge
+    ur_link = np.zeros(pad, dtype=np.uint8)
+    ul_go = np.zeros(pad, dtype=np.uint8)  # a diagonal walk to go on with
+    ur_go = np.zeros(pad, dtype=np.uint8)
+    ul_w = np.zeros(nw, dtype=np.uint64)
+    ur_w = np.zeros(nw, dtype=np.uint64)
+    on_w = np.zeros((4, nw), dtype=np.uint64)
+    walks = np.empty(w, dtype=np.int64)
+    link_c = np.empty(w, dtype=np.int64)
+    link_q = np.empty(w, dtype=np.int64)
+    one = np.uint64(1)
     k_row = min(reach, w - 1)
+    n_labels = np.uint64(0)
     for r in range(h):
-        k_up = min(reach, r)
-        k_diag = min(k_up, k_row)
-        c_l = cos_t[0, r]
-        s_l = sin_t[0, r]
-        c_u = cos_t[1, r]
-        s_u = sin_t[1, r]
-        c_ul = cos_t[2, r]
-        s_ul = sin_t[2, r]
-        c_ur = cos_t[3, r]
-        s_ur = sin_t[3, r]
         row = r * w
-        for c in range(w):
-            i = row + c
-            d = np.float64(rr[i])
-            if d <= 0.0:
-                continue
-            tp = max(threshold, d * sin_gamma)
-            tp2 = tp * tp
-            # The walks go to earlier pixels, except left walks across the seam, which reach the
-            # last k_row columns of the row: only there can i already have been joined.
-            root = i if c < w - k_row else _find(parent, i)
-            j_left = i - 1 if c > 0 else i + w - 1
-            j = _walk(rr, raw, w, r, c, d, tp, tp2, j_left, 0, -1, k_row, c_l, s_l)
-            inside = j == j_left
-            if j >= 0:
-                rj = _find(parent, j)
-                if rj < root:
-                    parent[root] = rj
-                    root = rj
-                elif rj > root:
-                    parent[rj] = root
-            if k_up == 0:
-                continue
-            j_up = i - w
-            j = _walk(rr, raw, w, r, c, d, tp, tp2, j_up, -1, 0, k_up, c_u, s_u)
-            if j >= 0:
-                rj = _find(parent, j)
-                if rj < root:
-                    parent[root] = rj
-                    root = rj
-                elif rj > root:
-                    parent[rj] = root
-            if inside and j == j_up:
-                continue
-            j1 = j_up - 1 if c > 0 else j_up + w - 1
-            j = _walk(rr, raw, w, r, c, d, tp, tp2, j1, -1, -1, k_diag, c_ul, s_ul)
-            if j >= 0:
-                rj = _find(parent, j)
-                if rj < root:
-                    parent[root] = rj
-                    root = rj
-                elif rj > root:
-                    parent[rj] = root
-            j1 = j_up + 1 if c < w - 1 else j_up - w + 1
-            j = _walk(rr, raw, w, r, c, d, tp, tp2, j1, -1, 1, k_diag, c_ur, s_ur)
-            if j >= 0:
-                rj = _find(parent, j)
-                if rj < root:
-                    parent[root] = rj
-                    root = rj
-                elif rj > root:
-                    parent[rj] = root
-    return number_components(parent, m_flat, weights.reshape(n), min_size).reshape(h, w)
+        d = nodes[row : row + w]
+        raw = rf[row : row + w]
+        if use_skip:
+            for c in range(w):
+                x = raw[c]
+                ok = (x > 0) & ~sf[row + c]
+                d[c] = x if ok else np.float32(0.0)
+                node[c] = ok
+        else:
+            for c in range(w):
+                x = raw[c]
+                d[c] = x if x > 0 else np.float32(0.0)
+                node[c] = x > 0
+        k_up = min(reach, r)
+        if k_row >= 1:
+            _first_steps(
+                left[1:w], left_on[1:w], d[1:], d[:-1], raw[:-1], threshold, sin_gamma,
+                cos_t[0, r, 1], sin_t[0, r, 1], k_row >= 2,
+            )  # fmt: skip
+            # column 0: its first step left crosses the seam (a link there is merged below)
+            _first_steps(
+                left[:1], left_on[:1], d[:1], d[w - 1 :], raw[w - 1 :], threshold, sin_gamma,
+                cos_t[0, r, 1], sin_t[0, r, 1], k_row >= 2,
+            )  # fmt: skip
+        seam = left[0]
+        left[0] = 0
+        k_diag = min(k_up, k_row)
+        if k_up >= 1:
+            above = nodes[row - w : row]
+            raw_above = rf[row - w : row]
+            _first_steps(
+                up[:w], up_on[:w], d, above, raw_above, threshold, sin_gamma, cos_t[1, r, 1],
+                sin_t[1, r, 1], k_up >= 2,
+            )  # fmt: skip
+        if k_diag >= 1:  # (w > 1) the diagonal neighbours, across the seam at both ends
+            c1, s1, on = cos_t[2, r, 1], sin_t[2, r, 1], k_diag >= 2
+            _first_steps(
+                ul[1:w], ul_on[1:w], d[1:], above[:-1], raw_above[:-1], threshold, sin_gamma,
+                c1, s1, on,
+            )  # fmt: skip
+            _first_steps(
+                ul[:1], ul_on[:1], d[:1], above[w - 1 :], raw_above[w - 1 :], threshold,
+                sin_gamma, c1, s1, on,
+            )  # fmt: skip
+            c1, s1 = cos_t[3, r, 1], sin_t[3, r, 1]
+            _first_steps(
+                ur[: w - 1], ur_on[: w - 1], d[:-1], above[1:], raw_above[1:], threshold,
+                sin_gamma, c1, s1, on,
+            )  # fmt: skip
+            _first_steps(
+                ur[w - 1 : w], ur_on[w - 1 : w], d[w - 1 :], above[:1], raw_above[:1],
+                threshold, sin_gamma, c1, s1, on,
+            )  # fmt: skip
+        n_labels = _label_row(
+            r, w, n_labels, d, node, left, up, node_w, left_w, left_up_w, up_w, starts, ends, acc,
+            labels, parent, size, wf, use_weights,
+        )  # fmt: skip
+        left_w, left_up_w = left_up_w, left_w
+        if seam:
+            _union(parent, labels[row], labels[row + w - 1])
+        # The diagonal walks of nodes not inside a surface (linked left and up at the first
+        # step): links at their first step are merged here; walks going on past their first
+        # step, in any direction, are walked one by one.
+        if k_diag >= 1:
+            for c in range(w):
+                out = ~(left[c] & up[c])  # (left[0] = 0: fixed below)
+                ul_link[c] = ul[c] & out
+                ur_link[c] = ur[c] & out
+                ul_go[c] = ul_on[c] & out
+                ur_go[c] = ur_on[c] & out
+            out = ~(seam & up[0])
+            ul_link[0] = ul[0] & out
+            ur_link[0] = ur[0] & out
+            ul_go[0] = ul_on[0] & out
+            ur_go[0] = ur_on[0] & out
+            _pack(ul_link[: 64 * nw], ul_w)
+            _pack(ur_link[: 64 * nw], ur_w)
+            _pack(ul_go[: 64 * nw], on_w[2])
+            _pack(ur_go[: 64 * nw], on_w[3])
+            for k in range(nw):
+                bits = ul_w[k]
+                while bits:
+                    c = 64 * k + np.int64(trailing_zeros(bits))
+                    bits &= bits - one
+                    j = row - w + (c - 1 if c > 0 else w - 1)
+                    _union(parent, labels[row + c], labels[j])
+                bits = ur_w[k]
+                while bits:
+                    c = 64 * k + np.int64(trailing_zeros(bits))
+                    bits &= bits - one
+                    j = row - w + (c + 1 if c < w - 1 else 0)
+                    _union(parent, labels[row + c], labels[j])
+        _pack(left_on[: 64 * nw], on_w[0])
+        _pack(up_on[: 64 * nw], on_w[1])
+        _walk_row(
+            r, w, on_w, nodes, rf, labels, parent, cos_t, sin_t, threshold, sin_gamma, k_row,
+            k_up, walks, link_c, link_q,
+        )  # fmt: skip
+    return labels[:n], _number(parent, size, np.int64(n_labels), min_size)
+
+
+#: (elevation bytes, width, reach) -> walk_tables; cleared when full
+_TABLES: dict[tuple, tuple[np.ndarray, np.ndarray]] = {}
+
+
+def cached_walk_tables(
+    elevation: np.ndarray, width: int, reach: int
+) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`walk_tables`, computed once per elevation, width and reach."""
+    key = (elevation.tobytes(), width, reach)
+    out = _TABLES.get(key)
+    if out is None:
+        if len(_TABLES) >= 64:
+            _TABLES.clear()
+        out = _TABLES[key] = walk_tables(elevation, width, reach)
+    return out
+
+
+@njit(cache=True)
+def bridge_pixels(*args) -> np.ndarray:  # noqa: ANN002
+    """Labels per pixel of :func:`_bridge_components` (same arguments), (H, W) int32."""
+    labels, final = _bridge_components(*args)
+    return pixel_output(labels, final).reshape(args[0].shape)
+
+
+@njit(cache=True)
+def bridge_points(point_pixel: np.ndarray, *args) -> np.ndarray:  # noqa: ANN002
+    """Labels per point (``point_pixel``: pixel of every point, -1 none) of
+    :func:`_bridge_components` (the other arguments)."""
+    labels, final = _bridge_components(*args)
+    return point_output(labels, final, point_pixel)
+
+
+def run_bridge(
+    ranges: np.ndarray,
+    elevation: np.ndarray,
+    threshold_m: float,
+    gamma_deg: float,
+    reach_px: int,
+    min_size: int,
+    skip: np.ndarray | None = None,
+    weights: np.ndarray | None = None,
+    point_pixel: np.ndarray | None = None,
+) -> np.ndarray:
+    """Bridge labels per pixel, or per point given ``point_pixel`` (see :func:`bridge_labels`;
+    ``skip``: pixels left out even with a range, e.g. ground)."""
+    if reach_px < 1:
+        raise ValueError(f"reach_px must be >= 1, got {reach_px}")
+    ranges, elevation, skip, use_skip, weights, use_weights = kernel_inputs(
+        ranges, elevation, skip, weights
+    )
+    cos_t, sin_t = cached_walk_tables(elevation, ranges.shape[1], int(reach_px))
+    args = (
+        ranges, skip, use_skip, cos_t, sin_t, float(threshold_m),
+        float(np.sin(np.radians(gamma_deg))), int(reach_px), int(min_size), weights, use_weights,
+    )  # fmt: skip
+    if point_pixel is None:
+        return bridge_pixels(*args)
+    return bridge_points(np.ascontiguousarray(point_pixel, dtype=np.int64), *args)
 
 
 def bridge_labels(
@@ -301,21 +474,8 @@ def bridge_labels(
     -------
     (H, W) int32, 0 = unclustered, 1..K clusters numbered in raster order.
     """
-    ranges = np.ascontiguousarray(ranges, dtype=np.float32)
-    if mask is None:
-        mask = ranges > 0
-    if reach_px < 1:
-        raise ValueError(f"reach_px must be >= 1, got {reach_px}")
-    return bridge_kernel(
-        ranges,
-        np.ascontiguousarray(mask, dtype=np.bool_),
-        np.asarray(elevation, dtype=np.float64),
-        float(threshold_m),
-        float(np.sin(np.radians(gamma_deg))),
-        int(reach_px),
-        int(min_size),
-        pixel_weights(weights, ranges.shape),
-    )
+    skip = None if mask is None else ~np.asarray(mask, dtype=bool)
+    return run_bridge(ranges, elevation, threshold_m, gamma_deg, reach_px, min_size, skip, weights)
 
 
 @dataclass(frozen=True, config=STRICT)
@@ -341,15 +501,14 @@ class Bridge:
     def segment(
         self, image: RangeImage, points: np.ndarray, ground: np.ndarray | None
     ) -> np.ndarray:
-        mask = image.ranges > 0 if ground is None else (image.ranges > 0) & ~ground
-        labels = bridge_labels(
+        return run_bridge(
             image.ranges,
             image.elevation,
             self.threshold_m,
             self.gamma_deg,
             self.reach_px,
             self.min_size,
-            mask,
-            image.point_counts(),
+            ground,
+            point_weights(image),
+            image.point_pixel,
         )
-        return image.point_labels(labels)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from functools import lru_cache
 from typing import Annotated, ClassVar, Literal
 
 import numpy as np
@@ -9,8 +10,8 @@ from pydantic import Field, PositiveInt, field_validator
 from pydantic.dataclasses import dataclass
 
 from flic_cli.config.component import STRICT
-from flic_cli.methods._unionfind import DISTANCE, connect_labels
-from flic_cli.methods.base import pixel_weights
+from flic_cli.methods._unionfind import DISTANCE, run_kernel
+from flic_cli.methods.base import point_weights
 from flic_cli.range_image import RangeImage
 
 MC_MODES = ("map", "neighbour")
@@ -31,7 +32,8 @@ def connection_sets(
 
     Returns
     -------
-    steps (M, 2), offsets (M, 2), lattice (M,) arrays for :func:`connect_labels`.
+    steps (M, 2), offsets (M, 2), lattice (M,) arrays for
+    :func:`flic_cli.methods._unionfind.connect`.
     """
     if mc_mode not in MC_MODES:
         raise ValueError(f"mc_mode must be one of {MC_MODES}, got {mc_mode!r}")
@@ -49,6 +51,22 @@ def connection_sets(
         np.array(offsets, dtype=np.int64),
         np.array(lattice, dtype=np.bool_),
     )
+
+
+def maps_key(maps: tuple | list) -> tuple[tuple[int, ...], ...]:
+    """``maps`` as a hashable tuple of int tuples."""
+    return tuple(tuple(int(v) for v in m) for m in maps)
+
+
+@lru_cache(maxsize=256)
+def cached_sets(
+    maps: tuple[tuple[int, ...], ...], mc_mode: str
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`connection_sets`, built once per maps and reading (read-only arrays)."""
+    sets = connection_sets(maps, mc_mode)
+    for a in sets:
+        a.flags.writeable = False
+    return sets
 
 
 def _linked(d1: np.ndarray, d2: np.ndarray, cos_a: np.ndarray, t2: float) -> np.ndarray:
@@ -168,7 +186,8 @@ def flic_labels(
     min_size : smallest cluster, in points (the sum of its pixels' ``weights``).
     maps : Map Connection steps, see :func:`connection_sets`.
     mc_mode : ``"map"`` or ``"neighbour"``.
-    mask : (H, W) bool, pixels to cluster (default: all valid pixels).
+    mask : (H, W) bool, pixels to cluster (default: all valid pixels); a pixel without a range
+        is never clustered.
     weights : (H, W) int, points per pixel (:meth:`flic_cli.range_image.RangeImage.point_counts`);
         default 1 per pixel (the minimum size then counts pixels).
 
@@ -176,21 +195,18 @@ def flic_labels(
     -------
     (H, W) int32, 0 = unclustered, 1..K clusters.
     """
-    ranges = np.ascontiguousarray(ranges, dtype=np.float32)
-    if mask is None:
-        mask = ranges > 0
-    steps, offsets, lattice = connection_sets(maps, mc_mode)
-    return connect_labels(
+    key = (maps_key(maps), mc_mode)
+    skip = None if mask is None else ~np.asarray(mask, dtype=bool)
+    return run_kernel(
         ranges,
-        np.ascontiguousarray(mask),
-        np.asarray(elevation, dtype=np.float64),
-        steps,
-        offsets,
-        lattice,
+        elevation,
+        cached_sets(*key),
+        key,
         DISTANCE,
         float(threshold_m) ** 2,
-        int(min_size),
-        pixel_weights(weights, ranges.shape),
+        min_size,
+        skip,
+        weights,
     )
 
 
@@ -234,15 +250,29 @@ class Flic:
     def segment(
         self, image: RangeImage, points: np.ndarray, ground: np.ndarray | None
     ) -> np.ndarray:
-        mask = image.ranges > 0 if ground is None else (image.ranges > 0) & ~ground
-        labels = BACKENDS[self.backend](
+        if self.backend == "scipy":
+            mask = image.ranges > 0 if ground is None else (image.ranges > 0) & ~ground
+            labels = flic_labels_scipy(
+                image.ranges,
+                image.elevation,
+                self.threshold_m,
+                self.min_size,
+                self.maps,
+                self.mc_mode,
+                mask,
+                image.point_counts(),
+            )
+            return image.point_labels(labels)
+        key = (maps_key(self.maps), self.mc_mode)
+        return run_kernel(
             image.ranges,
             image.elevation,
-            self.threshold_m,
+            cached_sets(*key),
+            key,
+            DISTANCE,
+            float(self.threshold_m) ** 2,
             self.min_size,
-            self.maps,
-            self.mc_mode,
-            mask,
-            image.point_counts(),
+            ground,
+            point_weights(image),
+            image.point_pixel,
         )
-        return image.point_labels(labels)
