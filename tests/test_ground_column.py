@@ -355,6 +355,101 @@ def test_kernel_equals_the_previous_implementation_on_random_images(ranges):
     assert np.array_equal(column_ground(image, neighbour_px=0), _reference(image))
 
 
+# ---- step 6 written plainly, the reference of the kernel's runs -----------------------------
+
+
+@njit(cache=True)
+def _ref_row_neighbours(ranges, sin_el, cos_el, cols, nb_px, nb_band, tan_foot, under):
+    """Step 6 cell by cell on top of the columns' mask ``cols``: the nearest cell of ``cols`` on
+    each side within ``nb_px`` columns at the same range (1 m) and height (``nb_band``), unless
+    the next valid cell above (2 rows) is a foot's or a near occluder's."""
+    h, w = ranges.shape
+    out = cols.copy()
+    for r in range(h):
+        se = np.float32(sin_el[r])
+        ce = np.float32(cos_el[r])
+        for c in range(w):
+            rho = ranges[r, c] * ce
+            if rho <= 0.0 or cols[r, c]:
+                continue
+            z = ranges[r, c] * se
+            hit = False
+            for side in (-1, 1):
+                q = c + side
+                while 0 <= q < w and not cols[r, q]:
+                    q += side
+                if 0 <= q < w and abs(q - c) <= nb_px and not hit:
+                    q_rho = ranges[r, q] * ce
+                    q_z = ranges[r, q] * se
+                    hit = abs(rho - q_rho) <= 1.0 and abs(z - q_z) <= nb_band
+            if not hit:
+                continue
+            stood = False
+            for ra in range(r - 1, max(r - 3, -1), -1):
+                ra_rho = ranges[ra, c] * np.float32(cos_el[ra])
+                if ra_rho > 0.0:
+                    d = ra_rho - rho
+                    if d < -0.3:
+                        stood = d > -under
+                    else:
+                        stood = ranges[ra, c] * np.float32(sin_el[ra]) - z > tan_foot * abs(d)
+                    break
+            out[r, c] = not stood
+    return out
+
+
+def _reference_full(image: RangeImage, nb_px=10, nb_band=0.08, foot_deg=30.0, under=2.0, **kw):
+    el = np.asarray(image.elevation, dtype=np.float64)
+    ranges = np.ascontiguousarray(image.ranges, dtype=np.float32)
+    cols = _reference(image, **kw)
+    tan_foot = float(np.tan(np.radians(foot_deg)))
+    return _ref_row_neighbours(
+        ranges, np.sin(el), np.cos(el), cols, nb_px, nb_band, tan_foot, under
+    )
+
+
+STEP6 = [{}, {"nb_px": 3, "nb_band": 0.03, "under": 0.0}, {"nb_px": 40, "foot_deg": 60.0}]
+
+
+def _kw6(kw):
+    names = {"nb_px": "neighbour_px", "nb_band": "neighbour_band_m", "under": "under_m"}
+    return {names.get(k, k): v for k, v in kw.items()}
+
+
+@pytest.mark.parametrize("kw", STEP6)
+def test_step_6_equals_the_plain_reference_on_synthetic_streets(kw):
+    zg = -H_S + STREET.kerb_height
+    people = [_person(x, 5.5, zg, instance=k + 1) for k, x in enumerate((6.0, 9.0, 13.0))]
+    scenes = [_scene(STREET, _car(20.0, -1.5, -H_S, 1), people), _scene(STREET)]
+    for seed, scene in enumerate(scenes):
+        image, _, _ = _image(scene, seed)
+        assert np.array_equal(column_ground(image, **_kw6(kw)), _reference_full(image, **kw))
+
+
+@pytest.mark.parametrize("kw", STEP6[:2])
+def test_step_6_equals_the_plain_reference_on_the_shared_frames(kitti_root, kw):
+    from flic_cli.config import load_config
+    from flic_cli.runs.pipeline import prepare
+
+    cfg = load_config()
+    ds = open_dataset(kitti_root)
+    for ref in ds.refs()[2::5]:
+        image = prepare(ds.load(ref), "ground", cfg.projection).image
+        assert np.array_equal(column_ground(image, **_kw6(kw)), _reference_full(image, **kw))
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    arrays(np.float32, (10, 14), elements=st.sampled_from([0.0, 3.0, 3.1, 4.5, 6.0, 6.2, 9.0, 25])),
+    st.integers(1, 6),
+)
+def test_step_6_equals_the_plain_reference_on_random_images(ranges, nb_px):
+    elevation = np.radians(np.linspace(-2, -24, 10))
+    image = RangeImage(ranges, elevation, np.flatnonzero(ranges.reshape(-1)), "native")
+    got = column_ground(image, neighbour_px=nb_px, neighbour_band_m=0.5)
+    assert np.array_equal(got, _reference_full(image, nb_px=nb_px, nb_band=0.5))
+
+
 # ---- step 6: row neighbours ------------------------------------------------------------------
 
 ROW_DIST = np.array([14.4, 12.0, 10.2, 8.9, 7.8])  # where each row meets a flat road 1.73 m down

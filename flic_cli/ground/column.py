@@ -46,13 +46,13 @@ residual is ``e = z - (z_g + m dr)``.
    first rows of ground beside an object): the ground points that join objects to each other and
    to fences and vegetation in clusterers that reach across pixels (DBSCAN, Bridge). So, once a
    row is done, a refused cell is ground when a cell taken by steps 2-5 in the same row, at most
-   ``neighbour_px`` columns to its left or right, is at about its range (1 m) and height
-   (``neighbour_band_m``), unless the cell is *stood on*: the next valid cell above it (within 2
-   rows) rises from it more steeply than ``foot_deg`` (the foot of a car, a person or a wall,
-   whose lowest points are labelled as the object), or is nearer by 0.3 m to ``under_m``
-   (ground seen under a car's body within its length, which the labels give to the car). Cells
-   taken this way are not used as references themselves (no chains), and the column models do
-   not follow them.
+   ``neighbour_px`` columns to its left or right (the nearest on each side), is at about its
+   range (1 m) and height (``neighbour_band_m``, 8 cm), unless the cell is *stood on*: the next
+   valid cell above it (within 2 rows) rises from it more steeply than ``foot_deg`` (the foot of
+   a car, a person or a wall, whose lowest points are labelled as the object), or is nearer by
+   0.3 m to ``under_m`` (ground seen under a car's body within its length, which the labels give
+   to the car). Cells taken this way are not references themselves (no chains), and the column
+   models do not follow them.
 
 Empty pixels are never ground. Every cell is visited once (a few cells above it are read for
 steps, seeds and the foot test), so the cost is linear in the image size. The image is not
@@ -100,7 +100,7 @@ _UNDER_MIN_M = 0.3  # a cell above nearer by more than this is an occluder (foot
  _P_BASE_BAND, _P_NB_PX, _P_NB_BAND, _P_TAN_FOOT, _P_UNDER, _P_LEN) = range(13)  # fmt: skip
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _surface_above(
     rho_img: np.ndarray,
     z_img: np.ndarray,
@@ -121,11 +121,13 @@ def _surface_above(
     lo = r - 1 - _RUN_ROWS
     if lo < -1:
         lo = -1
+    uc = np.uintp(c)  # unsigned indices: no negative-index wraparound in the generated code
     for ra in range(r - 1, lo, -1):
-        ra_rho = rho_img[ra, c]
+        ua = np.uintp(ra)
+        ra_rho = rho_img[ua, uc]
         if ra_rho <= 0.0:
             continue
-        ra_z = z_img[ra, c]
+        ra_z = z_img[ua, uc]
         if ra_rho < prev - _BEHIND_M or ra_rho > prev + _RUN_JUMP * prev:
             if n == 0:
                 if ra_rho < prev - _OCCLUDER_M - _OCCLUDER_REL * prev:
@@ -154,37 +156,75 @@ def _surface_above(
     return 1 if abs(run_z - z - grad * ddr) <= noise + tan_flat * ddr else 0
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _stood_on(
-    rho_img: np.ndarray, z_img: np.ndarray, r: int, c: int, tan_foot: float, under: float
+    rho_img: np.ndarray,
+    z_img: np.ndarray,
+    r: int,
+    c: int,
+    rho: float,
+    z: float,
+    tan_foot: float,
+    under: float,
 ) -> bool:
-    """Is (r, c) the foot of something (the next valid cell above, within ``_FOOT_ROWS`` rows,
-    rises from it more steeply than ``tan_foot``) or under a near occluder (the cell above is
-    nearer by ``_UNDER_MIN_M`` to ``under`` metres)?"""
-    rho = rho_img[r, c]
+    """Is (r, c), at (rho, z), the foot of something (the next valid cell above, within
+    ``_FOOT_ROWS`` rows, rises from it more steeply than ``tan_foot``) or under a near occluder
+    (the cell above is nearer by ``_UNDER_MIN_M`` to ``under`` metres)?"""
+    uc = np.uintp(c)
     ra = r - 1
     while ra >= 0 and ra >= r - _FOOT_ROWS:
-        ra_rho = rho_img[ra, c]
+        ua = np.uintp(ra)
+        ra_rho = rho_img[ua, uc]
         if ra_rho > 0.0:
             d = ra_rho - rho
             if d < -_UNDER_MIN_M:
                 return d > -under
-            return z_img[ra, c] - z_img[r, c] > tan_foot * abs(d)
+            return z_img[ua, uc] - z > tan_foot * abs(d)
         ra -= 1
     return False
 
 
 @njit(cache=True)
-def _row_ok(rho: float, z: float, ref_rho: float, ref_z: float, nb_band: float) -> bool:
-    """Is a cell at (rho, z) at the range and height of the row neighbour (ref_rho, ref_z)?"""
-    return abs(rho - ref_rho) <= _ROW_DRHO_M and abs(z - ref_z) <= nb_band
+def _seed_window(
+    se: float, ce: float, sensor_height: float, seed_tol: float, tan_seed: float
+) -> tuple[float, float]:
+    """The horizontal ranges (lo, hi) of one row (``z = rho se / ce``) within which the seed test
+    ``|z + sensor_height| <= seed_tol + tan_seed rho`` can hold, widened by 1 % and 1 cm so that
+    float rounding never leaves out a cell the exact test takes: cells outside are no seeds
+    without the test (most cells of columns that have no ground yet)."""
+    t = np.float64(se) / np.float64(ce)
+    lo = 0.0
+    hi = np.inf
+    a = t - tan_seed  # (t - k) rho <= s - h
+    b = seed_tol - sensor_height
+    if a > 0.0:
+        hi = min(hi, b / a)
+    elif a < 0.0:
+        lo = max(lo, b / a)
+    elif b < 0.0:
+        return 1.0, 0.0
+    a = t + tan_seed  # (t + k) rho >= -s - h
+    b = -seed_tol - sensor_height
+    if a > 0.0:
+        lo = max(lo, b / a)
+    elif a < 0.0:
+        hi = min(hi, b / a)
+    elif b > 0.0:
+        return 1.0, 0.0
+    return lo * 0.99 - 0.01, hi * 1.01 + 0.01
 
 
 @njit(cache=True)
 def _column_ground(
     ranges: np.ndarray, sin_el: np.ndarray, cos_el: np.ndarray, p: np.ndarray
 ) -> np.ndarray:
-    """The remover on one image; ``p`` holds the parameters in the ``_P_*`` layout."""
+    """The remover on one image; ``sin_el``, ``cos_el`` are float32 per row, ``p`` holds the
+    parameters in the ``_P_*`` layout.
+
+    Steps 1-5 run row by row from the bottom; every row then gets step 6 from the runs of cells
+    it refused (maximal sequences between two taken cells), each with the taken cell before and
+    after it. Helpers are inlined and indices into the images unsigned, which keeps the
+    generated code short (instruction counts in results/ground/README.md)."""
     sensor_height = p[_P_SENSOR]
     noise = p[_P_NOISE]
     tan_change = p[_P_TAN_CHANGE]
@@ -202,8 +242,8 @@ def _column_ground(
     rho_img = np.empty((h, w), dtype=np.float32)
     z_img = np.empty((h, w), dtype=np.float32)
     for r in range(h):
-        se = np.float32(sin_el[r])
-        ce = np.float32(cos_el[r])
+        se = sin_el[r]
+        ce = cos_el[r]
         for c in range(w):
             rho_img[r, c] = ranges[r, c] * ce
             z_img[r, c] = ranges[r, c] * se
@@ -216,43 +256,50 @@ def _column_ground(
     g_z = np.zeros(w)
     g_m = np.zeros(w)  # ground gradient
     last = np.zeros(w, dtype=np.bool_)  # the column's previous valid cell was ground
-    pend = np.empty(w, dtype=np.int64)  # refused cells waiting for a right row neighbour
+    # runs of refused cells of the row: taken cell before (-1: none), first cell, taken cell after
+    run_a = np.empty(w + 1, dtype=np.int64)
+    run_s = np.empty(w + 1, dtype=np.int64)
+    run_b = np.empty(w + 1, dtype=np.int64)
     for r in range(h - 1, -1, -1):
+        seed_lo, seed_hi = _seed_window(sin_el[r], cos_el[r], sensor_height, seed_tol, tan_seed)
         rrow = rho_img[r]
         zrow = z_img[r]
         orow = out[r]
-        ref_c = -(1 << 30)  # the last cell of this row taken by steps 2-5 (row neighbour)
-        ref_rho = 0.0
-        ref_z = 0.0
-        n_pend = 0
+        n_run = 0
+        in_run = False
+        last_taken = -1
         for c in range(w):
             rho = rrow[c]
             if rho <= 0.0:
                 continue
             z = zrow[c]
-            taken = False  # by steps 2-4 (the model follows)
             gr = g_rho[c]
+            taken = False  # by steps 2-5 (a reference of step 6)
             if gr >= 0.0:
                 dr = rho - gr
                 if dr >= -_BEHIND_M:  # else 1. in front of the ground: an object
                     if dr < 0.0:
                         dr = 0.0
                     gm = g_m[c]
-                    e = z - (g_z[c] + gm * dr)
+                    gz = g_z[c]
+                    e = z - (gz + gm * dr)
                     band = noise + tan_change * dr
                     if last[c] and -band <= e <= band:  # 2. continuation
                         taken = True
-                        if dr > _FAR_DR_M:
+                        if dr > _FAR_DR_M:  # the bottom row of a distant object?
+                            uc = np.uintp(c)
                             for ra in range(r - 1, -1, -1):
-                                ra_rho = rho_img[ra, c]
+                                ua = np.uintp(ra)
+                                ra_rho = rho_img[ua, uc]
                                 if ra_rho > 0.0:
-                                    if abs(ra_rho - rho) < 0.25 * dr and z_img[ra, c] > z:
+                                    if abs(ra_rho - rho) < 0.25 * dr and z_img[ua, uc] > z:
                                         taken = False
                                     break
                         if taken:
                             m = gm + _GAIN_GRADIENT * e / max(dr, _GAIN_BASE_M)
-                            g_z[c] = g_z[c] + gm * dr + _GAIN_HEIGHT * e
+                            g_z[c] = gz + gm * dr + _GAIN_HEIGHT * e
                             g_m[c] = min(max(m, -max_grad), max_grad)
+                            g_rho[c] = rho
                     else:  # 3. step
                         lim = step_k + tan_gap * dr
                         if lim > max_step:
@@ -262,14 +309,15 @@ def _column_ground(
                             if s == 1 or (s == 2 and abs(e) <= min(band, base_band)):
                                 taken = True
                                 g_z[c] = z
+                                g_rho[c] = rho
+                                last[c] = True
                     if not taken:
                         last[c] = False
                         # 5. base band: ground level just beyond the last ground point
-                        if dr < _BASE_DR_M and -base_band <= e <= base_band:
-                            orow[c] = True
+                        taken = dr < _BASE_DR_M and -base_band <= e <= base_band
                 else:
                     last[c] = False
-            else:  # 4. seed
+            elif seed_lo <= rho <= seed_hi:  # 4. seed (last[c] is False without ground)
                 e = z + sensor_height
                 lim = seed_tol + tan_seed * rho
                 if -lim <= e <= lim:
@@ -277,43 +325,65 @@ def _column_ground(
                     if s == 1 or (s == 2 and abs(e) <= base_band):
                         taken = True
                         g_z[c] = z
-                if not taken:
-                    last[c] = False
+                        g_rho[c] = rho
+                        last[c] = True
             if taken:
-                g_rho[c] = rho
-                last[c] = True
                 orow[c] = True
-            if nb_px <= 0:
+                if in_run:
+                    run_b[np.uintp(n_run)] = c
+                    n_run += 1
+                    in_run = False
+                last_taken = c
+            elif not in_run:
+                run_a[np.uintp(n_run)] = last_taken
+                run_s[np.uintp(n_run)] = c
+                in_run = True
+        if in_run:
+            run_b[np.uintp(n_run)] = -1
+            n_run += 1
+        if nb_px <= 0:
+            continue
+        # 6. neighbours in the row: the cells of every run within reach of the taken cell before
+        # it (a) or after it (b), compared with the nearer-side reference(s) in reach
+        for k in range(n_run):
+            uk = np.uintp(k)
+            a = run_a[uk]
+            b = run_b[uk]
+            if a < 0 and b < 0:
                 continue
-            # 6. neighbours in the row
-            if orow[c]:
-                for k in range(n_pend - 1, -1, -1):  # refused cells waiting on the left
-                    q = pend[k]
-                    if c - q > nb_px:
+            a_rho = rrow[np.uintp(a)] if a >= 0 else np.float32(0.0)
+            a_z = zrow[np.uintp(a)] if a >= 0 else np.float32(0.0)
+            b_rho = rrow[np.uintp(b)] if b >= 0 else np.float32(0.0)
+            b_z = zrow[np.uintp(b)] if b >= 0 else np.float32(0.0)
+            q = run_s[uk]
+            end = b if b >= 0 else w
+            while q < end:
+                in_a = a >= 0 and q - a <= nb_px
+                in_b = b >= 0 and b - q <= nb_px
+                if not (in_a or in_b):
+                    if b < 0:
                         break
-                    if _row_ok(rrow[q], zrow[q], rho, z, nb_band):
-                        if not _stood_on(rho_img, z_img, r, q, tan_foot, under):
-                            orow[q] = True
-                n_pend = 0
-                ref_c = c
-                ref_rho = rho
-                ref_z = z
-            elif c - ref_c <= nb_px and _row_ok(rho, z, ref_rho, ref_z, nb_band):
-                if not _stood_on(rho_img, z_img, r, c, tan_foot, under):
-                    orow[c] = True
-                # (stood on: no row neighbour takes it)
-            else:
-                pend[n_pend] = c
-                n_pend += 1
+                    q = b - nb_px  # skip to the part of the run within reach of b
+                    continue
+                uq = np.uintp(q)
+                rho = rrow[uq]
+                if rho > 0.0:
+                    z = zrow[uq]
+                    hit = in_a and abs(rho - a_rho) <= _ROW_DRHO_M and abs(z - a_z) <= nb_band
+                    if not hit and in_b:
+                        hit = abs(rho - b_rho) <= _ROW_DRHO_M and abs(z - b_z) <= nb_band
+                    if hit and not _stood_on(rho_img, z_img, r, q, rho, z, tan_foot, under):
+                        orow[uq] = True
+                q += 1
     return out
 
 
 @functools.lru_cache(maxsize=32)
 def _row_trig(elevation: bytes) -> tuple[np.ndarray, np.ndarray]:
-    """Sine and cosine of every row, for one elevation table (given as its float64 bytes):
-    computed once per sensor instead of once per frame."""
+    """Sine and cosine of every row as float32 (the precision of the ranges they multiply), for
+    one elevation table (given as its float64 bytes): computed once per sensor, not per frame."""
     el = np.frombuffer(elevation, dtype=np.float64)
-    out = (np.sin(el), np.cos(el))
+    out = (np.sin(el).astype(np.float32), np.cos(el).astype(np.float32))
     for a in out:
         a.setflags(write=False)
     return out
@@ -363,7 +433,7 @@ def column_ground(
     seed_tolerance_m: float = 0.2,
     base_band_m: float = 0.05,
     neighbour_px: int = 10,
-    neighbour_band_m: float = 0.05,
+    neighbour_band_m: float = 0.08,
     foot_deg: float = 30.0,
     under_m: float = 2.0,
 ) -> np.ndarray:
@@ -445,7 +515,7 @@ class ColumnGround:
     seed_tolerance_m: Annotated[float, Field(gt=0, description="metres")] = 0.2
     base_band_m: Annotated[float, Field(ge=0, description="metres")] = 0.05
     neighbour_px: Annotated[int, Field(ge=0, le=1000, description="columns")] = 10
-    neighbour_band_m: Annotated[float, Field(ge=0, description="metres")] = 0.05
+    neighbour_band_m: Annotated[float, Field(ge=0, description="metres")] = 0.08
     foot_deg: Annotated[float, Field(gt=0, lt=90, description="degrees")] = 30.0
     under_m: Annotated[float, Field(ge=0, description="metres")] = 2.0
 
