@@ -12,6 +12,10 @@ Usage::
     python scripts/ground_sweep.py ../shared/data/semantickitti \
         --out results/ground/sweep_column.csv
     python scripts/ground_sweep.py ... --methods flic0,flic6,flic14,dbscan   # DBSCAN: slow
+    python scripts/ground_sweep.py ../shared/data/semantickitti \
+        --params neighbour_px,neighbour_band_m,foot_deg,under_m,base_band_m \
+        --methods flic0,flic6,flic14,bridge,dbscan-fast \
+        --out results/ground/sweep_column_neighbours.csv
 """
 
 from __future__ import annotations
@@ -41,6 +45,11 @@ GRID: dict[str, list[float]] = {
     "flat_deg": [10.0, 15.0, 20.0],
     "seed_tolerance_m": [0.1, 0.2, 0.3],
     "base_band_m": [0.0, 0.05, 0.1, 0.15],
+    # step 6, row neighbours (0 columns turns it off)
+    "neighbour_px": [0, 3, 5, 10, 20, 40],
+    "neighbour_band_m": [0.02, 0.03, 0.05, 0.08, 0.12],
+    "foot_deg": [15.0, 20.0, 30.0, 45.0, 60.0],
+    "under_m": [0.0, 1.0, 2.0, 3.0, 5.0],
 }
 
 
@@ -72,6 +81,7 @@ def main() -> None:
     parser.add_argument("--out", type=Path, default=Path("results/ground/sweep_column.csv"))
     parser.add_argument("--methods", default="flic0,flic6,flic14")
     parser.add_argument("--sample-frames", type=int, default=20, help="synthetic frames")
+    parser.add_argument("--params", default=",".join(GRID), help="parameters to sweep")
     args = parser.parse_args()
 
     from flic_cli.sample import write_sample
@@ -86,7 +96,8 @@ def main() -> None:
         for set_name, root in sets.items():
             pairs = load_frames(root, cfg, None)
             reference = iou_mu(pairs, methods, None)
-            runs = [("default", None)] + [(p, v) for p, vals in GRID.items() for v in vals
+            swept = args.params.split(",")
+            runs = [("default", None)] + [(p, v) for p in swept for v in GRID[p]
                                           if v != defaults[p]]  # fmt: skip
             for param, value in runs:
                 remover = ColumnGround(**({} if param == "default" else {param: value}))

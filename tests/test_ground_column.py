@@ -1,5 +1,7 @@
 """flic's ``column`` ground remover on synthetic geometry: kerbs, slopes, a car roof at 20 m,
-people on a sidewalk (scenes built with the sample's ray caster, labels from the scene)."""
+people on a sidewalk (scenes built with the sample's ray caster, labels from the scene); the
+optimised kernel against the previous implementation, kept below as the reference; step 6 (row
+neighbours) on hand-built rows."""
 
 from __future__ import annotations
 
@@ -8,8 +10,10 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
+from numba import njit
 
 from flic_cli.ground import REMOVERS, ColumnGround, column_ground
+from flic_cli.io import open_dataset
 from flic_cli.range_image import RangeImage, from_sensor_image
 from flic_cli.sample import HDL64_PITCH_DEG, Box, Cylinder, Ground, Scene, cast, kitti_azimuths
 
@@ -122,3 +126,403 @@ def test_column_is_a_registered_component_with_validated_parameters():
         ColumnGround(noise_m=-1.0)
     image, _, _ = _image(_scene(STREET))
     assert np.array_equal(ColumnGround()(image, None), column_ground(image))
+
+
+# ---- the previous implementation (flic 4eec351), the reference of the optimised kernel ----------
+# Same steps 1-5, written with per-call trigonometry and a first pass of its own; the optimised
+# kernel must give the same masks with step 6 off (neighbour_px=0).
+
+_BEHIND_M = 0.05  # a cell nearer than the last ground point by more than this is an object
+_GAP_SLOPE_DEG = 5.0  # slope change allowed per metre of gap for a step
+_SEED_SLOPE_DEG = 2.0  # seed tolerance grows with range at this slope
+_FAR_DR_M = 0.5  # beyond this gap a continuation checks the cell above for an object
+_RUN_CELLS = 3  # cells above that confirm a step or a seed
+_RUN_MIN_CELLS = 2  # ...at least this many of them
+_RUN_ROWS = 6  # ...found within this many rows
+_RUN_JUMP = 0.3  # a cell farther than this share of rho ends the run (a depth jump)
+_OCCLUDER_M = 0.15  # a cell above nearer by more than this (+2 % of rho) occludes the cell
+_OCCLUDER_REL = 0.02
+_GAIN_HEIGHT = 0.5  # alpha-beta filter of the ground model
+_GAIN_GRADIENT = 0.3
+_GAIN_BASE_M = 1.0  # the gradient update divides by max(dr, this)
+_MAX_GRADIENT_DEG = 10.0
+_BASE_DR_M = 1.0  # the base band applies within this distance beyond the last ground point
+
+
+@njit(cache=True)
+def _ref_surface_above(
+    rho_img: np.ndarray,
+    z_img: np.ndarray,
+    r: int,
+    c: int,
+    rho: float,
+    z: float,
+    grad: float,
+    noise: float,
+    tan_flat: float,
+) -> int:
+
+    n = 0
+    prev = rho
+    run_rho = rho
+    run_z = z
+    lo = r - 1 - _RUN_ROWS
+    if lo < -1:
+        lo = -1
+    for ra in range(r - 1, lo, -1):
+        ra_rho = rho_img[ra, c]
+        if ra_rho <= 0.0:
+            continue
+        ra_z = z_img[ra, c]
+        if ra_rho < prev - _BEHIND_M or ra_rho > prev + _RUN_JUMP * prev:
+            if n == 0:
+                if ra_rho < prev - _OCCLUDER_M - _OCCLUDER_REL * prev:
+                    return 2
+                return 0
+            break
+        ddr = ra_rho - rho
+        if ddr < 0.0:
+            ddr = 0.0
+        # every cell within a loose band, the end of the run within the flat band
+        if abs(ra_z - z - grad * ddr) > 2.0 * noise + tan_flat * ddr:
+            return 0
+        prev = ra_rho
+        run_rho = ra_rho
+        run_z = ra_z
+        n += 1
+        if n >= _RUN_CELLS:
+            break
+    if n == 0:
+        return 2
+    if n < _RUN_MIN_CELLS:
+        return 0
+    ddr = run_rho - rho
+    if ddr < 0.0:
+        ddr = 0.0
+    return 1 if abs(run_z - z - grad * ddr) <= noise + tan_flat * ddr else 0
+
+
+@njit(cache=True)
+def _ref_column_ground(
+    ranges: np.ndarray,
+    sin_el: np.ndarray,
+    cos_el: np.ndarray,
+    sensor_height: float,
+    noise: float,
+    tan_change: float,
+    kerb: float,
+    max_step: float,
+    tan_flat: float,
+    seed_tol: float,
+    base_band: float,
+) -> np.ndarray:
+    h, w = ranges.shape
+    # horizontal range and height of every pixel (0, 0 where empty: cos(elevation) > 0)
+    rho_img = np.empty((h, w), dtype=np.float32)
+    z_img = np.empty((h, w), dtype=np.float32)
+    for r in range(h):
+        se = np.float32(sin_el[r])
+        ce = np.float32(cos_el[r])
+        for c in range(w):
+            rho_img[r, c] = ranges[r, c] * ce
+            z_img[r, c] = ranges[r, c] * se
+    tan_gap = np.tan(np.radians(_GAP_SLOPE_DEG))
+    tan_seed = np.tan(np.radians(_SEED_SLOPE_DEG))
+    max_grad = np.tan(np.radians(_MAX_GRADIENT_DEG))
+    out = np.zeros((h, w), dtype=np.bool_)
+    g_rho = np.full(w, -1.0)  # last ground point of the column (-1: none yet)
+    g_z = np.zeros(w)
+    g_m = np.zeros(w)  # ground gradient
+    last = np.zeros(w, dtype=np.bool_)  # the column's previous valid cell was ground
+    for r in range(h - 1, -1, -1):
+        for c in range(w):
+            rho = rho_img[r, c]
+            if rho <= 0.0:
+                continue
+            z = z_img[r, c]
+            cont = False
+            dr = 0.0
+            e = 0.0
+            if g_rho[c] >= 0.0:
+                dr = rho - g_rho[c]
+                if dr < -_BEHIND_M:  # 1. in front of the ground: an object
+                    last[c] = False
+                    continue
+                if dr < 0.0:
+                    dr = 0.0
+                e = z - (g_z[c] + g_m[c] * dr)
+                band = noise + tan_change * dr
+                if last[c] and -band <= e <= band:  # 2. continuation
+                    ok = True
+                    cont = True
+                    if dr > _FAR_DR_M:
+                        for ra in range(r - 1, -1, -1):
+                            ra_rho = rho_img[ra, c]
+                            if ra_rho > 0.0:
+                                stands = abs(ra_rho - rho) < 0.25 * dr
+                                if stands and z_img[ra, c] > z:
+                                    ok = False
+                                break
+                else:  # 3. step
+                    lim = noise + kerb + tan_gap * dr
+                    if lim > max_step:
+                        lim = max_step
+                    ok = -(noise + kerb + 3.0 * tan_gap * dr) <= e <= lim
+                    if ok:
+                        s = _ref_surface_above(
+                            rho_img, z_img, r, c, rho, z, g_m[c], noise, tan_flat
+                        )
+                        ok = s == 1 or (s == 2 and abs(e) <= min(band, base_band))
+            else:  # 4. seed
+                e = z + sensor_height
+                lim = seed_tol + tan_seed * rho
+                ok = -lim <= e <= lim
+                if ok:
+                    s = _ref_surface_above(rho_img, z_img, r, c, rho, z, 0.0, noise, tan_flat)
+                    ok = s == 1 or (s == 2 and abs(e) <= base_band)
+            if ok:
+                if cont:
+                    m = g_m[c] + _GAIN_GRADIENT * e / max(dr, _GAIN_BASE_M)
+                    g_z[c] = g_z[c] + g_m[c] * dr + _GAIN_HEIGHT * e
+                    g_m[c] = min(max(m, -max_grad), max_grad)
+                else:
+                    g_z[c] = z
+                g_rho[c] = rho
+                out[r, c] = True
+                last[c] = True
+            else:
+                last[c] = False
+                # 5. base band: ground level just beyond the last ground point
+                if g_rho[c] >= 0.0 and dr < _BASE_DR_M and -base_band <= e <= base_band:
+                    out[r, c] = True
+    return out
+
+
+def _reference(image: RangeImage, **kw) -> np.ndarray:
+    p = dict(sensor_height_m=1.73, noise_m=0.03, slope_change_deg=1.0, kerb_m=0.2,
+             max_step_m=0.4, flat_deg=15.0, seed_tolerance_m=0.2, base_band_m=0.05)  # fmt: skip
+    p.update(kw)
+    el = np.asarray(image.elevation, dtype=np.float64)
+    return _ref_column_ground(
+        np.ascontiguousarray(image.ranges, dtype=np.float32),
+        np.sin(el),
+        np.cos(el),
+        float(p["sensor_height_m"]),
+        float(p["noise_m"]),
+        float(np.tan(np.radians(p["slope_change_deg"]))),
+        float(p["kerb_m"]),
+        float(p["max_step_m"]),
+        float(np.tan(np.radians(p["flat_deg"]))),
+        float(p["seed_tolerance_m"]),
+        float(p["base_band_m"]),
+    )
+
+
+SETTINGS = [{}, {"base_band_m": 0.1, "kerb_m": 0.1, "noise_m": 0.05}, {"max_step_m": 0.6}]
+
+
+@pytest.mark.parametrize("kw", SETTINGS)
+def test_kernel_equals_the_previous_implementation_on_synthetic_streets(kw):
+    scenes = [_scene(STREET), _scene(STREET, _car(20.0, -1.5, -H_S, 1))]
+    slope = Ground(slope=float(np.tan(np.radians(4.0))), road_y=(-6, 6), sidewalk_y=(-9, 9))
+    scenes.append(_scene(slope))
+    for seed, scene in enumerate(scenes):
+        image, _, _ = _image(scene, seed)
+        assert np.array_equal(column_ground(image, neighbour_px=0, **kw), _reference(image, **kw))
+
+
+@pytest.mark.parametrize("kw", SETTINGS[:2])
+def test_kernel_equals_the_previous_implementation_on_the_shared_frames(kitti_root, kw):
+    from flic_cli.config import load_config
+    from flic_cli.runs.pipeline import prepare
+
+    cfg = load_config()
+    ds = open_dataset(kitti_root)
+    for ref in ds.refs()[::5]:
+        image = prepare(ds.load(ref), "ground", cfg.projection).image
+        assert np.array_equal(column_ground(image, neighbour_px=0, **kw), _reference(image, **kw))
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    arrays(
+        np.float32, (10, 14), elements=st.sampled_from([0.0, 3.0, 3.1, 4.5, 6.0, 6.2, 9.0, 25.0])
+    )
+)
+def test_kernel_equals_the_previous_implementation_on_random_images(ranges):
+    elevation = np.radians(np.linspace(-2, -24, 10))
+    image = RangeImage(ranges, elevation, np.flatnonzero(ranges.reshape(-1)), "native")
+    assert np.array_equal(column_ground(image, neighbour_px=0), _reference(image))
+
+
+# ---- step 6 written plainly, the reference of the kernel's runs -----------------------------
+
+
+@njit(cache=True)
+def _ref_row_neighbours(ranges, sin_el, cos_el, cols, nb_px, nb_band, tan_foot, under):
+    """Step 6 cell by cell on top of the columns' mask ``cols``: the nearest cell of ``cols`` on
+    each side within ``nb_px`` columns at the same range (1 m) and height (``nb_band``), unless
+    the next valid cell above (2 rows) is a foot's or a near occluder's."""
+    h, w = ranges.shape
+    out = cols.copy()
+    for r in range(h):
+        se = np.float32(sin_el[r])
+        ce = np.float32(cos_el[r])
+        for c in range(w):
+            rho = ranges[r, c] * ce
+            if rho <= 0.0 or cols[r, c]:
+                continue
+            z = ranges[r, c] * se
+            hit = False
+            for side in (-1, 1):
+                q = c + side
+                while 0 <= q < w and not cols[r, q]:
+                    q += side
+                if 0 <= q < w and abs(q - c) <= nb_px and not hit:
+                    q_rho = ranges[r, q] * ce
+                    q_z = ranges[r, q] * se
+                    hit = abs(rho - q_rho) <= 1.0 and abs(z - q_z) <= nb_band
+            if not hit:
+                continue
+            stood = False
+            for ra in range(r - 1, max(r - 3, -1), -1):
+                ra_rho = ranges[ra, c] * np.float32(cos_el[ra])
+                if ra_rho > 0.0:
+                    d = ra_rho - rho
+                    if d < -0.3:
+                        stood = d > -under
+                    else:
+                        stood = ranges[ra, c] * np.float32(sin_el[ra]) - z > tan_foot * abs(d)
+                    break
+            out[r, c] = not stood
+    return out
+
+
+def _reference_full(image: RangeImage, nb_px=10, nb_band=0.08, foot_deg=30.0, under=2.0, **kw):
+    el = np.asarray(image.elevation, dtype=np.float64)
+    ranges = np.ascontiguousarray(image.ranges, dtype=np.float32)
+    cols = _reference(image, **kw)
+    tan_foot = float(np.tan(np.radians(foot_deg)))
+    return _ref_row_neighbours(
+        ranges, np.sin(el), np.cos(el), cols, nb_px, nb_band, tan_foot, under
+    )
+
+
+STEP6 = [{}, {"nb_px": 3, "nb_band": 0.03, "under": 0.0}, {"nb_px": 40, "foot_deg": 60.0}]
+
+
+def _kw6(kw):
+    names = {"nb_px": "neighbour_px", "nb_band": "neighbour_band_m", "under": "under_m"}
+    return {names.get(k, k): v for k, v in kw.items()}
+
+
+@pytest.mark.parametrize("kw", STEP6)
+def test_step_6_equals_the_plain_reference_on_synthetic_streets(kw):
+    zg = -H_S + STREET.kerb_height
+    people = [_person(x, 5.5, zg, instance=k + 1) for k, x in enumerate((6.0, 9.0, 13.0))]
+    scenes = [_scene(STREET, _car(20.0, -1.5, -H_S, 1), people), _scene(STREET)]
+    for seed, scene in enumerate(scenes):
+        image, _, _ = _image(scene, seed)
+        assert np.array_equal(column_ground(image, **_kw6(kw)), _reference_full(image, **kw))
+
+
+@pytest.mark.parametrize("kw", STEP6[:2])
+def test_step_6_equals_the_plain_reference_on_the_shared_frames(kitti_root, kw):
+    from flic_cli.config import load_config
+    from flic_cli.runs.pipeline import prepare
+
+    cfg = load_config()
+    ds = open_dataset(kitti_root)
+    for ref in ds.refs()[2::5]:
+        image = prepare(ds.load(ref), "ground", cfg.projection).image
+        assert np.array_equal(column_ground(image, **_kw6(kw)), _reference_full(image, **kw))
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    arrays(np.float32, (10, 14), elements=st.sampled_from([0.0, 3.0, 3.1, 4.5, 6.0, 6.2, 9.0, 25])),
+    st.integers(1, 6),
+)
+def test_step_6_equals_the_plain_reference_on_random_images(ranges, nb_px):
+    elevation = np.radians(np.linspace(-2, -24, 10))
+    image = RangeImage(ranges, elevation, np.flatnonzero(ranges.reshape(-1)), "native")
+    got = column_ground(image, neighbour_px=nb_px, neighbour_band_m=0.5)
+    assert np.array_equal(got, _reference_full(image, nb_px=nb_px, nb_band=0.5))
+
+
+# ---- step 6: row neighbours ------------------------------------------------------------------
+
+ROW_DIST = np.array([14.4, 12.0, 10.2, 8.9, 7.8])  # where each row meets a flat road 1.73 m down
+
+
+def _road_rows(w: int = 40) -> tuple[np.ndarray, np.ndarray]:
+    """(rho, z) of five rows of a flat road 1.73 m below the sensor, ``w`` columns."""
+    rho = np.repeat(ROW_DIST[:, None], w, axis=1)
+    return rho, np.full_like(rho, -H_S)
+
+
+def _image_of(rho: np.ndarray, z: np.ndarray) -> RangeImage:
+    """The range image whose cells lie at (rho, z) (rho 0 = empty); every row's cells must share
+    one elevation, that of ``ROW_DIST`` on the road."""
+    el = np.arctan2(-H_S, ROW_DIST)
+    valid = rho > 0
+    assert np.allclose(z[valid], (rho * np.tan(el)[:, None])[valid])
+    ranges = np.where(valid, np.hypot(rho, z), 0.0).astype(np.float32)
+    return RangeImage(ranges, el, np.flatnonzero(ranges.reshape(-1)), "native")
+
+
+def _dip(rho: np.ndarray, z: np.ndarray, rows: slice, depth: float) -> None:
+    """Lower the road by ``depth`` in ``rows`` (cells stay on their rays)."""
+    scale = (H_S + depth) / H_S
+    rho[rows] *= scale
+    z[rows] = -(H_S + depth)
+
+
+def _dip_street() -> tuple[np.ndarray, np.ndarray]:
+    """The road dips 0.07 m from row 2 on; columns 15-20 see nothing above row 2, so their
+    columns cannot confirm the dip (no surface above, 0.07 m is beyond the 0.05 m base band)."""
+    rho, z = _road_rows()
+    _dip(rho, z, slice(0, 3), 0.07)
+    rho[:2, 15:21] = 0.0
+    z[:2, 15:21] = 0.0
+    return rho, z
+
+
+def test_row_neighbours_take_ground_the_columns_cannot_confirm():
+    rho, z = _dip_street()
+    image = _image_of(rho, z)
+    off = column_ground(image, neighbour_px=0)
+    on = column_ground(image, neighbour_px=10)
+    assert off[2, :15].all() and off[2, 21:].all()  # the columns confirm the dip from above
+    assert not off[2, 15:21].any()
+    assert on[2, 15:21].all()  # row 2 holds the same road 1-6 columns away
+    assert np.array_equal(on[3:], off[3:]) and on[3:].all()
+    # reach: with a reach of 3 columns only those within 3 of a column-taken cell
+    near = column_ground(image, neighbour_px=3)
+    assert near[2, 15:18].all() and near[2, 18:21].all()
+    assert not column_ground(image, neighbour_px=2)[2, 17:19].any()
+
+
+def test_row_neighbours_keep_the_foot_of_what_stands_on_the_cell():
+    rho, z = _dip_street()
+    # something standing on the cells of row 2, columns 15-20: row 1 hits its face 0.1 m farther
+    # and about 0.3 m higher (a face leaning back at about 72 deg)
+    el1 = np.arctan2(-H_S, ROW_DIST[1])
+    rho[1, 15:21] = rho[2, 15:21] + 0.1
+    z[1, 15:21] = rho[1, 15:21] * np.tan(el1)
+    rise = np.degrees(np.arctan2(z[1, 15:21] - z[2, 15:21], 0.1))
+    assert (rise > 60).all() and (rise < 80).all()
+    image = _image_of(rho, z)
+    assert not column_ground(image)[2, 15:21].any()  # a foot at foot_deg 30
+    assert column_ground(image, foot_deg=85.0)[2, 15:21].all()  # not steep enough for 85 deg
+
+
+def test_row_neighbours_keep_ground_under_a_near_occluder():
+    rho, z = _dip_street()
+    el1 = np.arctan2(-H_S, ROW_DIST[1])
+    for behind, kept in ((1.0, True), (3.0, False)):
+        r2, z2 = rho.copy(), z.copy()
+        r2[1, 15:21] = rho[2, 15:21] - behind  # a car body above the cell, nearer by `behind`
+        z2[1, 15:21] = r2[1, 15:21] * np.tan(el1)
+        got = column_ground(_image_of(r2, z2), under_m=2.0)[2, 15:21]
+        assert (not got.any()) if kept else got.all()

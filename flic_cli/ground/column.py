@@ -41,9 +41,22 @@ residual is ``e = z - (z_g + m dr)``.
    last ground point is ground too (the strip at the foot of objects, where a few centimetres of
    ground are labelled as the object or the object's lowest row is at road level), but the model
    does not follow it.
+6. **Neighbours in the row.** The column steps leave ground behind where a column loses its
+   model (a strip of parking between a grass verge and a car, terrain behind a low fence, the
+   first rows of ground beside an object): the ground points that join objects to each other and
+   to fences and vegetation in clusterers that reach across pixels (DBSCAN, Bridge). So, once a
+   row is done, a refused cell is ground when a cell taken by steps 2-5 in the same row, at most
+   ``neighbour_px`` columns to its left or right (the nearest on each side), is at about its
+   range (1 m) and height (``neighbour_band_m``, 8 cm), unless the cell is *stood on*: the next
+   valid cell above it (within 2 rows) rises from it more steeply than ``foot_deg`` (the foot of
+   a car, a person or a wall, whose lowest points are labelled as the object), or is nearer by
+   0.3 m to ``under_m`` (ground seen under a car's body within its length, which the labels give
+   to the car). Cells taken this way are not references themselves (no chains), and the column
+   models do not follow them.
 
 Empty pixels are never ground. Every cell is visited once (a few cells above it are read for
-steps and seeds), so the cost is linear in the image size.
+steps, seeds and the foot test), so the cost is linear in the image size. The image is not
+wrapped at its left and right edges.
 
 Parameters (see :class:`ColumnGround`) were chosen by the sweep in ``results/ground/`` on the
 shared SemanticKITTI frames and the synthetic sample (``scripts/ground_sweep.py``).
@@ -51,6 +64,7 @@ shared SemanticKITTI frames and the synthetic sample (``scripts/ground_sweep.py`
 
 from __future__ import annotations
 
+import functools
 from typing import Annotated
 
 import numpy as np
@@ -77,9 +91,16 @@ _GAIN_GRADIENT = 0.3
 _GAIN_BASE_M = 1.0  # the gradient update divides by max(dr, this)
 _MAX_GRADIENT_DEG = 10.0
 _BASE_DR_M = 1.0  # the base band applies within this distance beyond the last ground point
+_ROW_DRHO_M = 1.0  # a row neighbour is at most this much nearer or farther
+_FOOT_ROWS = 2  # the foot test reads the next valid cell within this many rows above
+_UNDER_MIN_M = 0.3  # a cell above nearer by more than this is an occluder (foot test)
+
+# Layout of the parameter vector of :func:`_column_ground` (one array: one argument to type).
+(_P_SENSOR, _P_NOISE, _P_TAN_CHANGE, _P_KERB, _P_MAX_STEP, _P_TAN_FLAT, _P_SEED_TOL,
+ _P_BASE_BAND, _P_NB_PX, _P_NB_BAND, _P_TAN_FOOT, _P_UNDER, _P_LEN) = range(13)  # fmt: skip
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _surface_above(
     rho_img: np.ndarray,
     z_img: np.ndarray,
@@ -100,11 +121,13 @@ def _surface_above(
     lo = r - 1 - _RUN_ROWS
     if lo < -1:
         lo = -1
+    uc = np.uintp(c)  # unsigned indices: no negative-index wraparound in the generated code
     for ra in range(r - 1, lo, -1):
-        ra_rho = rho_img[ra, c]
+        ua = np.uintp(ra)
+        ra_rho = rho_img[ua, uc]
         if ra_rho <= 0.0:
             continue
-        ra_z = z_img[ra, c]
+        ra_z = z_img[ua, uc]
         if ra_rho < prev - _BEHIND_M or ra_rho > prev + _RUN_JUMP * prev:
             if n == 0:
                 if ra_rho < prev - _OCCLUDER_M - _OCCLUDER_REL * prev:
@@ -133,98 +156,270 @@ def _surface_above(
     return 1 if abs(run_z - z - grad * ddr) <= noise + tan_flat * ddr else 0
 
 
+@njit(cache=True, inline="always")
+def _stood_on(
+    rho_img: np.ndarray,
+    z_img: np.ndarray,
+    r: int,
+    c: int,
+    rho: float,
+    z: float,
+    tan_foot: float,
+    under: float,
+) -> bool:
+    """Is (r, c), at (rho, z), the foot of something (the next valid cell above, within
+    ``_FOOT_ROWS`` rows, rises from it more steeply than ``tan_foot``) or under a near occluder
+    (the cell above is nearer by ``_UNDER_MIN_M`` to ``under`` metres)?"""
+    uc = np.uintp(c)
+    ra = r - 1
+    while ra >= 0 and ra >= r - _FOOT_ROWS:
+        ua = np.uintp(ra)
+        ra_rho = rho_img[ua, uc]
+        if ra_rho > 0.0:
+            d = ra_rho - rho
+            if d < -_UNDER_MIN_M:
+                return d > -under
+            return z_img[ua, uc] - z > tan_foot * abs(d)
+        ra -= 1
+    return False
+
+
+@njit(cache=True)
+def _seed_window(
+    se: float, ce: float, sensor_height: float, seed_tol: float, tan_seed: float
+) -> tuple[float, float]:
+    """The horizontal ranges (lo, hi) of one row (``z = rho se / ce``) within which the seed test
+    ``|z + sensor_height| <= seed_tol + tan_seed rho`` can hold, widened by 1 % and 1 cm so that
+    float rounding never leaves out a cell the exact test takes: cells outside are no seeds
+    without the test (most cells of columns that have no ground yet)."""
+    t = np.float64(se) / np.float64(ce)
+    lo = 0.0
+    hi = np.inf
+    a = t - tan_seed  # (t - k) rho <= s - h
+    b = seed_tol - sensor_height
+    if a > 0.0:
+        hi = min(hi, b / a)
+    elif a < 0.0:
+        lo = max(lo, b / a)
+    elif b < 0.0:
+        return 1.0, 0.0
+    a = t + tan_seed  # (t + k) rho >= -s - h
+    b = -seed_tol - sensor_height
+    if a > 0.0:
+        lo = max(lo, b / a)
+    elif a < 0.0:
+        hi = min(hi, b / a)
+    elif b > 0.0:
+        return 1.0, 0.0
+    return lo * 0.99 - 0.01, hi * 1.01 + 0.01
+
+
 @njit(cache=True)
 def _column_ground(
-    ranges: np.ndarray,
-    sin_el: np.ndarray,
-    cos_el: np.ndarray,
-    sensor_height: float,
-    noise: float,
-    tan_change: float,
-    kerb: float,
-    max_step: float,
-    tan_flat: float,
-    seed_tol: float,
-    base_band: float,
+    ranges: np.ndarray, sin_el: np.ndarray, cos_el: np.ndarray, p: np.ndarray
 ) -> np.ndarray:
+    """The remover on one image; ``sin_el``, ``cos_el`` are float32 per row, ``p`` holds the
+    parameters in the ``_P_*`` layout.
+
+    Steps 1-5 run row by row from the bottom; every row then gets step 6 from the runs of cells
+    it refused (maximal sequences between two taken cells), each with the taken cell before and
+    after it. Helpers are inlined and indices into the images unsigned, which keeps the
+    generated code short (instruction counts in results/ground/README.md)."""
+    sensor_height = p[_P_SENSOR]
+    noise = p[_P_NOISE]
+    tan_change = p[_P_TAN_CHANGE]
+    kerb = p[_P_KERB]
+    max_step = p[_P_MAX_STEP]
+    tan_flat = p[_P_TAN_FLAT]
+    seed_tol = p[_P_SEED_TOL]
+    base_band = p[_P_BASE_BAND]
+    nb_px = int(p[_P_NB_PX])
+    nb_band = p[_P_NB_BAND]
+    tan_foot = p[_P_TAN_FOOT]
+    under = p[_P_UNDER]
     h, w = ranges.shape
     # horizontal range and height of every pixel (0, 0 where empty: cos(elevation) > 0)
     rho_img = np.empty((h, w), dtype=np.float32)
     z_img = np.empty((h, w), dtype=np.float32)
     for r in range(h):
-        se = np.float32(sin_el[r])
-        ce = np.float32(cos_el[r])
+        se = sin_el[r]
+        ce = cos_el[r]
         for c in range(w):
             rho_img[r, c] = ranges[r, c] * ce
             z_img[r, c] = ranges[r, c] * se
     tan_gap = np.tan(np.radians(_GAP_SLOPE_DEG))
     tan_seed = np.tan(np.radians(_SEED_SLOPE_DEG))
     max_grad = np.tan(np.radians(_MAX_GRADIENT_DEG))
+    step_k = noise + kerb
     out = np.zeros((h, w), dtype=np.bool_)
     g_rho = np.full(w, -1.0)  # last ground point of the column (-1: none yet)
     g_z = np.zeros(w)
     g_m = np.zeros(w)  # ground gradient
     last = np.zeros(w, dtype=np.bool_)  # the column's previous valid cell was ground
+    # runs of refused cells of the row: taken cell before (-1: none), first cell, taken cell after
+    run_a = np.empty(w + 1, dtype=np.int64)
+    run_s = np.empty(w + 1, dtype=np.int64)
+    run_b = np.empty(w + 1, dtype=np.int64)
     for r in range(h - 1, -1, -1):
+        seed_lo, seed_hi = _seed_window(sin_el[r], cos_el[r], sensor_height, seed_tol, tan_seed)
+        rrow = rho_img[r]
+        zrow = z_img[r]
+        orow = out[r]
+        n_run = 0
+        in_run = False
+        last_taken = -1
         for c in range(w):
-            rho = rho_img[r, c]
+            rho = rrow[c]
             if rho <= 0.0:
                 continue
-            z = z_img[r, c]
-            cont = False
-            dr = 0.0
-            e = 0.0
-            if g_rho[c] >= 0.0:
-                dr = rho - g_rho[c]
-                if dr < -_BEHIND_M:  # 1. in front of the ground: an object
+            z = zrow[c]
+            gr = g_rho[c]
+            taken = False  # by steps 2-5 (a reference of step 6)
+            if gr >= 0.0:
+                dr = rho - gr
+                if dr >= -_BEHIND_M:  # else 1. in front of the ground: an object
+                    if dr < 0.0:
+                        dr = 0.0
+                    gm = g_m[c]
+                    gz = g_z[c]
+                    e = z - (gz + gm * dr)
+                    band = noise + tan_change * dr
+                    if last[c] and -band <= e <= band:  # 2. continuation
+                        taken = True
+                        if dr > _FAR_DR_M:  # the bottom row of a distant object?
+                            uc = np.uintp(c)
+                            for ra in range(r - 1, -1, -1):
+                                ua = np.uintp(ra)
+                                ra_rho = rho_img[ua, uc]
+                                if ra_rho > 0.0:
+                                    if abs(ra_rho - rho) < 0.25 * dr and z_img[ua, uc] > z:
+                                        taken = False
+                                    break
+                        if taken:
+                            m = gm + _GAIN_GRADIENT * e / max(dr, _GAIN_BASE_M)
+                            g_z[c] = gz + gm * dr + _GAIN_HEIGHT * e
+                            g_m[c] = min(max(m, -max_grad), max_grad)
+                            g_rho[c] = rho
+                    else:  # 3. step
+                        lim = step_k + tan_gap * dr
+                        if lim > max_step:
+                            lim = max_step
+                        if -(step_k + 3.0 * tan_gap * dr) <= e <= lim:
+                            s = _surface_above(rho_img, z_img, r, c, rho, z, gm, noise, tan_flat)
+                            if s == 1 or (s == 2 and abs(e) <= min(band, base_band)):
+                                taken = True
+                                g_z[c] = z
+                                g_rho[c] = rho
+                                last[c] = True
+                    if not taken:
+                        last[c] = False
+                        # 5. base band: ground level just beyond the last ground point
+                        taken = dr < _BASE_DR_M and -base_band <= e <= base_band
+                else:
                     last[c] = False
-                    continue
-                if dr < 0.0:
-                    dr = 0.0
-                e = z - (g_z[c] + g_m[c] * dr)
-                band = noise + tan_change * dr
-                if last[c] and -band <= e <= band:  # 2. continuation
-                    ok = True
-                    cont = True
-                    if dr > _FAR_DR_M:
-                        for ra in range(r - 1, -1, -1):
-                            ra_rho = rho_img[ra, c]
-                            if ra_rho > 0.0:
-                                stands = abs(ra_rho - rho) < 0.25 * dr
-                                if stands and z_img[ra, c] > z:
-                                    ok = False
-                                break
-                else:  # 3. step
-                    lim = noise + kerb + tan_gap * dr
-                    if lim > max_step:
-                        lim = max_step
-                    ok = -(noise + kerb + 3.0 * tan_gap * dr) <= e <= lim
-                    if ok:
-                        s = _surface_above(rho_img, z_img, r, c, rho, z, g_m[c], noise, tan_flat)
-                        ok = s == 1 or (s == 2 and abs(e) <= min(band, base_band))
-            else:  # 4. seed
+            elif seed_lo <= rho <= seed_hi:  # 4. seed (last[c] is False without ground)
                 e = z + sensor_height
                 lim = seed_tol + tan_seed * rho
-                ok = -lim <= e <= lim
-                if ok:
+                if -lim <= e <= lim:
                     s = _surface_above(rho_img, z_img, r, c, rho, z, 0.0, noise, tan_flat)
-                    ok = s == 1 or (s == 2 and abs(e) <= base_band)
-            if ok:
-                if cont:
-                    m = g_m[c] + _GAIN_GRADIENT * e / max(dr, _GAIN_BASE_M)
-                    g_z[c] = g_z[c] + g_m[c] * dr + _GAIN_HEIGHT * e
-                    g_m[c] = min(max(m, -max_grad), max_grad)
-                else:
-                    g_z[c] = z
-                g_rho[c] = rho
-                out[r, c] = True
-                last[c] = True
-            else:
-                last[c] = False
-                # 5. base band: ground level just beyond the last ground point
-                if g_rho[c] >= 0.0 and dr < _BASE_DR_M and -base_band <= e <= base_band:
-                    out[r, c] = True
+                    if s == 1 or (s == 2 and abs(e) <= base_band):
+                        taken = True
+                        g_z[c] = z
+                        g_rho[c] = rho
+                        last[c] = True
+            if taken:
+                orow[c] = True
+                if in_run:
+                    run_b[np.uintp(n_run)] = c
+                    n_run += 1
+                    in_run = False
+                last_taken = c
+            elif not in_run:
+                run_a[np.uintp(n_run)] = last_taken
+                run_s[np.uintp(n_run)] = c
+                in_run = True
+        if in_run:
+            run_b[np.uintp(n_run)] = -1
+            n_run += 1
+        if nb_px <= 0:
+            continue
+        # 6. neighbours in the row: the cells of every run within reach of the taken cell before
+        # it (a) or after it (b), compared with the nearer-side reference(s) in reach
+        for k in range(n_run):
+            uk = np.uintp(k)
+            a = run_a[uk]
+            b = run_b[uk]
+            if a < 0 and b < 0:
+                continue
+            a_rho = rrow[np.uintp(a)] if a >= 0 else np.float32(0.0)
+            a_z = zrow[np.uintp(a)] if a >= 0 else np.float32(0.0)
+            b_rho = rrow[np.uintp(b)] if b >= 0 else np.float32(0.0)
+            b_z = zrow[np.uintp(b)] if b >= 0 else np.float32(0.0)
+            q = run_s[uk]
+            end = b if b >= 0 else w
+            while q < end:
+                in_a = a >= 0 and q - a <= nb_px
+                in_b = b >= 0 and b - q <= nb_px
+                if not (in_a or in_b):
+                    if b < 0:
+                        break
+                    q = b - nb_px  # skip to the part of the run within reach of b
+                    continue
+                uq = np.uintp(q)
+                rho = rrow[uq]
+                if rho > 0.0:
+                    z = zrow[uq]
+                    hit = in_a and abs(rho - a_rho) <= _ROW_DRHO_M and abs(z - a_z) <= nb_band
+                    if not hit and in_b:
+                        hit = abs(rho - b_rho) <= _ROW_DRHO_M and abs(z - b_z) <= nb_band
+                    if hit and not _stood_on(rho_img, z_img, r, q, rho, z, tan_foot, under):
+                        orow[uq] = True
+                q += 1
     return out
+
+
+@functools.lru_cache(maxsize=32)
+def _row_trig(elevation: bytes) -> tuple[np.ndarray, np.ndarray]:
+    """Sine and cosine of every row as float32 (the precision of the ranges they multiply), for
+    one elevation table (given as its float64 bytes): computed once per sensor, not per frame."""
+    el = np.frombuffer(elevation, dtype=np.float64)
+    out = (np.sin(el).astype(np.float32), np.cos(el).astype(np.float32))
+    for a in out:
+        a.setflags(write=False)
+    return out
+
+
+@functools.lru_cache(maxsize=64)
+def _param_vector(
+    sensor_height_m: float,
+    noise_m: float,
+    slope_change_deg: float,
+    kerb_m: float,
+    max_step_m: float,
+    flat_deg: float,
+    seed_tolerance_m: float,
+    base_band_m: float,
+    neighbour_px: int,
+    neighbour_band_m: float,
+    foot_deg: float,
+    under_m: float,
+) -> np.ndarray:
+    """The parameters in the ``_P_*`` layout of :func:`_column_ground` (cached per setting)."""
+    p = np.zeros(_P_LEN)
+    p[_P_SENSOR] = sensor_height_m
+    p[_P_NOISE] = noise_m
+    p[_P_TAN_CHANGE] = np.tan(np.radians(slope_change_deg))
+    p[_P_KERB] = kerb_m
+    p[_P_MAX_STEP] = max_step_m
+    p[_P_TAN_FLAT] = np.tan(np.radians(flat_deg))
+    p[_P_SEED_TOL] = seed_tolerance_m
+    p[_P_BASE_BAND] = base_band_m
+    p[_P_NB_PX] = neighbour_px
+    p[_P_NB_BAND] = neighbour_band_m
+    p[_P_TAN_FOOT] = np.tan(np.radians(foot_deg))
+    p[_P_UNDER] = under_m
+    p.setflags(write=False)
+    return p
 
 
 def column_ground(
@@ -237,6 +432,10 @@ def column_ground(
     flat_deg: float = 15.0,
     seed_tolerance_m: float = 0.2,
     base_band_m: float = 0.05,
+    neighbour_px: int = 10,
+    neighbour_band_m: float = 0.08,
+    foot_deg: float = 30.0,
+    under_m: float = 2.0,
 ) -> np.ndarray:
     """Ground pixels by column-wise ground tracking (see the module docstring).
 
@@ -253,25 +452,38 @@ def column_ground(
     seed_tolerance_m : a column's first ground cell lies within this of the road height (plus
         2 deg of slope times its range), metres.
     base_band_m : cells this close to the ground model just beyond it are ground, metres.
+    neighbour_px : how far (columns) a row neighbour taken by the column steps may be; 0 turns
+        step 6 off.
+    neighbour_band_m : largest height difference to that row neighbour, metres.
+    foot_deg : a cell whose next cell above rises from it more steeply than this is the foot of
+        something standing on it and stays, degrees.
+    under_m : a cell whose next cell above is nearer by 0.3 m to this is ground under a car's
+        body (labelled as the car) and stays, metres.
 
     Returns
     -------
     (H, W) bool, True = ground. Empty pixels are never ground.
     """
-    el = np.asarray(image.elevation, dtype=np.float64)
-    return _column_ground(
-        np.ascontiguousarray(image.ranges, dtype=np.float32),
-        np.sin(el),
-        np.cos(el),
+    el = np.ascontiguousarray(image.elevation, dtype=np.float64)
+    sin_el, cos_el = _row_trig(el.tobytes())
+    ranges = image.ranges
+    if ranges.dtype != np.float32 or not ranges.flags.c_contiguous:
+        ranges = np.ascontiguousarray(ranges, dtype=np.float32)
+    params = _param_vector(
         float(sensor_height_m),
         float(noise_m),
-        float(np.tan(np.radians(slope_change_deg))),
+        float(slope_change_deg),
         float(kerb_m),
         float(max_step_m),
-        float(np.tan(np.radians(flat_deg))),
+        float(flat_deg),
         float(seed_tolerance_m),
         float(base_band_m),
+        int(neighbour_px),
+        float(neighbour_band_m),
+        float(foot_deg),
+        float(under_m),
     )
+    return _column_ground(ranges, sin_el, cos_el, params)
 
 
 @dataclass(frozen=True, config=STRICT)
@@ -288,6 +500,10 @@ class ColumnGround:
     flat_deg : the surface above a step or a seed is within this of the ground's slope, degrees.
     seed_tolerance_m : a column's first ground cell is within this of the road height, metres.
     base_band_m : cells within this of the ground just beyond it are ground, metres.
+    neighbour_px : reach of step 6 (row neighbours), columns; 0 turns it off.
+    neighbour_band_m : height band around a row neighbour, metres.
+    foot_deg : steeper rise to the cell above marks a foot (kept), degrees.
+    under_m : ground under a nearer occluder up to this far behind it is kept, metres.
     """
 
     sensor_height_m: Annotated[float, Field(gt=0, description="metres")] = 1.73
@@ -298,6 +514,10 @@ class ColumnGround:
     flat_deg: Annotated[float, Field(gt=0, lt=60, description="degrees")] = 15.0
     seed_tolerance_m: Annotated[float, Field(gt=0, description="metres")] = 0.2
     base_band_m: Annotated[float, Field(ge=0, description="metres")] = 0.05
+    neighbour_px: Annotated[int, Field(ge=0, le=1000, description="columns")] = 10
+    neighbour_band_m: Annotated[float, Field(ge=0, description="metres")] = 0.08
+    foot_deg: Annotated[float, Field(gt=0, lt=90, description="degrees")] = 30.0
+    under_m: Annotated[float, Field(ge=0, description="metres")] = 2.0
 
     def __call__(self, image: RangeImage, points: np.ndarray | None = None) -> np.ndarray:
         """(H, W) bool ground mask of ``image`` (see :func:`column_ground`)."""
@@ -311,4 +531,8 @@ class ColumnGround:
             self.flat_deg,
             self.seed_tolerance_m,
             self.base_band_m,
+            self.neighbour_px,
+            self.neighbour_band_m,
+            self.foot_deg,
+            self.under_m,
         )
