@@ -422,70 +422,6 @@ def _param_vector(
     return p
 
 
-def column_ground(
-    image: RangeImage,
-    sensor_height_m: float = 1.73,
-    noise_m: float = 0.03,
-    slope_change_deg: float = 1.0,
-    kerb_m: float = 0.2,
-    max_step_m: float = 0.4,
-    flat_deg: float = 15.0,
-    seed_tolerance_m: float = 0.2,
-    base_band_m: float = 0.05,
-    neighbour_px: int = 10,
-    neighbour_band_m: float = 0.08,
-    foot_deg: float = 30.0,
-    under_m: float = 2.0,
-) -> np.ndarray:
-    """Ground pixels by column-wise ground tracking (see the module docstring).
-
-    Parameters
-    ----------
-    image : the range image.
-    sensor_height_m : sensor above the road, metres (where columns start their ground).
-    noise_m : height noise of the ground between neighbouring cells, metres.
-    slope_change_deg : how fast the ground may bend, degrees per metre of ``dr``.
-    kerb_m : largest step up onto a surface that continues flat (a kerb), metres.
-    max_step_m : largest step up after a gap, metres (protects roofs, hoods, benches).
-    flat_deg : largest deviation from the ground's gradient of the surface that confirms a step
-        or a seed, degrees.
-    seed_tolerance_m : a column's first ground cell lies within this of the road height (plus
-        2 deg of slope times its range), metres.
-    base_band_m : cells this close to the ground model just beyond it are ground, metres.
-    neighbour_px : how far (columns) a row neighbour taken by the column steps may be; 0 turns
-        step 6 off.
-    neighbour_band_m : largest height difference to that row neighbour, metres.
-    foot_deg : a cell whose next cell above rises from it more steeply than this is the foot of
-        something standing on it and stays, degrees.
-    under_m : a cell whose next cell above is nearer by 0.3 m to this is ground under a car's
-        body (labelled as the car) and stays, metres.
-
-    Returns
-    -------
-    (H, W) bool, True = ground. Empty pixels are never ground.
-    """
-    el = np.ascontiguousarray(image.elevation, dtype=np.float64)
-    sin_el, cos_el = _row_trig(el.tobytes())
-    ranges = image.ranges
-    if ranges.dtype != np.float32 or not ranges.flags.c_contiguous:
-        ranges = np.ascontiguousarray(ranges, dtype=np.float32)
-    params = _param_vector(
-        float(sensor_height_m),
-        float(noise_m),
-        float(slope_change_deg),
-        float(kerb_m),
-        float(max_step_m),
-        float(flat_deg),
-        float(seed_tolerance_m),
-        float(base_band_m),
-        int(neighbour_px),
-        float(neighbour_band_m),
-        float(foot_deg),
-        float(under_m),
-    )
-    return _column_ground(ranges, sin_el, cos_el, params)
-
-
 @dataclass(frozen=True, config=STRICT)
 class ColumnGround:
     """flic's column-wise ground tracking as a :class:`flic_cli.ground.base.GroundRemover`.
@@ -536,3 +472,67 @@ class ColumnGround:
             self.foot_deg,
             self.under_m,
         )
+
+
+def column_ground(
+    image: RangeImage,
+    sensor_height_m: float = ColumnGround.sensor_height_m,
+    noise_m: float = ColumnGround.noise_m,
+    slope_change_deg: float = ColumnGround.slope_change_deg,
+    kerb_m: float = ColumnGround.kerb_m,
+    max_step_m: float = ColumnGround.max_step_m,
+    flat_deg: float = ColumnGround.flat_deg,
+    seed_tolerance_m: float = ColumnGround.seed_tolerance_m,
+    base_band_m: float = ColumnGround.base_band_m,
+    neighbour_px: int = ColumnGround.neighbour_px,
+    neighbour_band_m: float = ColumnGround.neighbour_band_m,
+    foot_deg: float = ColumnGround.foot_deg,
+    under_m: float = ColumnGround.under_m,
+) -> np.ndarray:
+    """Ground pixels by column-wise ground tracking (see the module docstring).
+
+    Parameters
+    ----------
+    image : the range image.
+    sensor_height_m : sensor above the road, metres (where columns start their ground).
+    noise_m : height noise of the ground between neighbouring cells, metres.
+    slope_change_deg : how fast the ground may bend, degrees per metre of ``dr``.
+    kerb_m : largest step up onto a surface that continues flat (a kerb), metres.
+    max_step_m : largest step up after a gap, metres (protects roofs, hoods, benches).
+    flat_deg : largest deviation from the ground's gradient of the surface that confirms a step
+        or a seed, degrees.
+    seed_tolerance_m : a column's first ground cell lies within this of the road height (plus
+        2 deg of slope times its range), metres.
+    base_band_m : cells this close to the ground model just beyond it are ground, metres.
+    neighbour_px : how far (columns) a row neighbour taken by the column steps may be; 0 turns
+        step 6 off.
+    neighbour_band_m : largest height difference to that row neighbour, metres.
+    foot_deg : a cell whose next cell above rises from it more steeply than this is the foot of
+        something standing on it and stays, degrees.
+    under_m : a cell whose next cell above is nearer by 0.3 m to this is ground under a car's
+        body (labelled as the car) and stays, metres.
+
+    Returns
+    -------
+    (H, W) bool, True = ground. Empty pixels are never ground.
+    """
+    el = np.ascontiguousarray(image.elevation, dtype=np.float64)
+    sin_el, cos_el = _row_trig(el.tobytes())
+    ranges = image.ranges
+    if ranges.dtype != np.float32 or not ranges.flags.c_contiguous:
+        ranges = np.ascontiguousarray(ranges, dtype=np.float32)
+    params = _param_vector(
+        float(sensor_height_m),
+        float(noise_m),
+        float(slope_change_deg),
+        float(kerb_m),
+        float(max_step_m),
+        float(flat_deg),
+        float(seed_tolerance_m),
+        float(base_band_m),
+        int(neighbour_px),
+        float(neighbour_band_m),
+        float(foot_deg),
+        float(under_m),
+    )
+    return _column_ground(ranges, sin_el, cos_el, params)

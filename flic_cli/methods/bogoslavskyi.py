@@ -25,11 +25,42 @@ def bogoslavskyi_beta(d1: np.ndarray, d2: np.ndarray, alpha: np.ndarray) -> np.n
     return np.arctan2(small * np.sin(alpha), big - small * np.cos(alpha))
 
 
+@dataclass(frozen=True, config=STRICT)
+class Bogoslavskyi:
+    """Bogoslavskyi & Stachniss as a :class:`flic_cli.methods.base.Method`.
+
+    Attributes
+    ----------
+    angle_deg : neighbours join when their angle beta exceeds this, degrees.
+    min_size : smallest cluster kept, points of the evaluated set (a pixel counts its points).
+    """
+
+    angle_deg: Annotated[float, Field(gt=0, lt=90, description="angle threshold, degrees")] = 10.0
+    min_size: Annotated[int, Field(ge=1, description="smallest cluster kept, points")] = 100
+    main_param: ClassVar[str] = "angle_deg"
+
+    def segment(
+        self, image: RangeImage, points: np.ndarray, ground: np.ndarray | None
+    ) -> np.ndarray:
+        return run_kernel(
+            image.ranges,
+            image.elevation,
+            cached_sets((), "map"),
+            DIRECT,
+            ANGLE,
+            float(np.tan(np.radians(self.angle_deg))),
+            self.min_size,
+            ground,
+            point_weights(image),
+            image.point_pixel,
+        )
+
+
 def bogoslavskyi_labels(
     ranges: np.ndarray,
     elevation: np.ndarray,
-    angle_deg: float = 10.0,
-    min_size: int = 100,
+    angle_deg: float = Bogoslavskyi.angle_deg,
+    min_size: int = Bogoslavskyi.min_size,
     mask: np.ndarray | None = None,
     weights: np.ndarray | None = None,
 ) -> np.ndarray:
@@ -63,34 +94,3 @@ def bogoslavskyi_labels(
         skip,
         weights,
     )
-
-
-@dataclass(frozen=True, config=STRICT)
-class Bogoslavskyi:
-    """Bogoslavskyi & Stachniss as a :class:`flic_cli.methods.base.Method`.
-
-    Attributes
-    ----------
-    angle_deg : neighbours join when their angle beta exceeds this, degrees.
-    min_size : smallest cluster kept, points of the evaluated set (a pixel counts its points).
-    """
-
-    angle_deg: Annotated[float, Field(gt=0, lt=90, description="angle threshold, degrees")] = 10.0
-    min_size: Annotated[int, Field(ge=1, description="smallest cluster kept, points")] = 100
-    main_param: ClassVar[str] = "angle_deg"
-
-    def segment(
-        self, image: RangeImage, points: np.ndarray, ground: np.ndarray | None
-    ) -> np.ndarray:
-        return run_kernel(
-            image.ranges,
-            image.elevation,
-            cached_sets((), "map"),
-            DIRECT,
-            ANGLE,
-            float(np.tan(np.radians(self.angle_deg))),
-            self.min_size,
-            ground,
-            point_weights(image),
-            image.point_pixel,
-        )

@@ -446,38 +446,6 @@ def run_bridge(
     return bridge_points(np.ascontiguousarray(point_pixel, dtype=np.int64), *args)
 
 
-def bridge_labels(
-    ranges: np.ndarray,
-    elevation: np.ndarray,
-    threshold_m: float = 0.35,
-    gamma_deg: float = 2.0,
-    reach_px: int = 12,
-    min_size: int = 100,
-    mask: np.ndarray | None = None,
-    weights: np.ndarray | None = None,
-) -> np.ndarray:
-    """Bridge cluster labels of a range image (the graph is defined in the module docstring).
-
-    Parameters
-    ----------
-    ranges : (H, W) ranges, metres, 0 = no measurement.
-    elevation : (H,) row elevations, radians.
-    threshold_m : link distance near the sensor, metres.
-    gamma_deg : beyond ``threshold_m / sin(gamma)`` the link distance is ``d sin(gamma)``,
-        degrees (0 = fixed threshold).
-    reach_px : longest walk, pixels (rows or columns).
-    min_size : smallest cluster, points (the sum of its pixels' ``weights``).
-    mask : (H, W) bool, pixels to cluster (default: all valid pixels).
-    weights : (H, W) int, points per pixel (default 1 per pixel).
-
-    Returns
-    -------
-    (H, W) int32, 0 = unclustered, 1..K clusters numbered in raster order.
-    """
-    skip = None if mask is None else ~np.asarray(mask, dtype=bool)
-    return run_bridge(ranges, elevation, threshold_m, gamma_deg, reach_px, min_size, skip, weights)
-
-
 @dataclass(frozen=True, config=STRICT)
 class Bridge:
     """Bridge as a :class:`flic_cli.methods.base.Method` (see :func:`bridge_labels`).
@@ -512,3 +480,35 @@ class Bridge:
             point_weights(image),
             image.point_pixel,
         )
+
+
+def bridge_labels(
+    ranges: np.ndarray,
+    elevation: np.ndarray,
+    threshold_m: float = Bridge.threshold_m,
+    gamma_deg: float = Bridge.gamma_deg,
+    reach_px: int = Bridge.reach_px,
+    min_size: int = Bridge.min_size,
+    mask: np.ndarray | None = None,
+    weights: np.ndarray | None = None,
+) -> np.ndarray:
+    """Bridge cluster labels of a range image (the graph is defined in the module docstring).
+
+    Parameters
+    ----------
+    ranges : (H, W) ranges, metres, 0 = no measurement.
+    elevation : (H,) row elevations, radians.
+    threshold_m : link distance near the sensor, metres.
+    gamma_deg : beyond ``threshold_m / sin(gamma)`` the link distance is ``d sin(gamma)``,
+        degrees (0 = fixed threshold).
+    reach_px : longest walk, pixels (rows or columns).
+    min_size : smallest cluster, points (the sum of its pixels' ``weights``).
+    mask : (H, W) bool, pixels to cluster (default: all valid pixels).
+    weights : (H, W) int, points per pixel (default 1 per pixel).
+
+    Returns
+    -------
+    (H, W) int32, 0 = unclustered, 1..K clusters numbered in raster order.
+    """
+    skip = None if mask is None else ~np.asarray(mask, dtype=bool)
+    return run_bridge(ranges, elevation, threshold_m, gamma_deg, reach_px, min_size, skip, weights)

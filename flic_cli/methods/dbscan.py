@@ -62,33 +62,6 @@ def raw_dbscan(
     raise ValueError(f"unknown DBSCAN backend {backend!r} ({' | '.join(BACKENDS)})")
 
 
-def dbscan_labels(
-    points: np.ndarray,
-    eps_m: float = 0.5,
-    min_samples: int = 5,
-    min_size: int = 100,
-    backend: str = "sklearn",
-) -> np.ndarray:
-    """DBSCAN cluster labels of 3D points.
-
-    Parameters
-    ----------
-    points : (N, 3) metres.
-    eps_m : neighbourhood radius, metres.
-    min_samples : points (the point itself included) in the radius that make a core point.
-    min_size : clusters with fewer points are dropped, as for the image methods.
-    backend : ``"sklearn"`` (reference) or ``"fastdbscan"`` (module docstring).
-
-    Returns
-    -------
-    (N,) int32, 0 = noise or dropped, 1..K clusters in order of first point.
-    """
-    if points.shape[0] == 0:
-        return np.zeros(0, dtype=np.int32)
-    raw, _ = raw_dbscan(points, eps_m, min_samples, backend)
-    return drop_small(raw + 1, min_size)
-
-
 @dataclass(frozen=True, config=STRICT)
 class Dbscan:
     """DBSCAN as a :class:`flic_cli.methods.base.Method`; ground pixels' points are left out.
@@ -128,3 +101,30 @@ class Dbscan:
             points[keep], self.eps_m, self.min_samples, self.min_size, self.backend
         )
         return out
+
+
+def dbscan_labels(
+    points: np.ndarray,
+    eps_m: float = Dbscan.eps_m,
+    min_samples: int = Dbscan.min_samples,
+    min_size: int = Dbscan.min_size,
+    backend: str = Dbscan.backend,
+) -> np.ndarray:
+    """DBSCAN cluster labels of 3D points.
+
+    Parameters
+    ----------
+    points : (N, 3) metres.
+    eps_m : neighbourhood radius, metres.
+    min_samples : points (the point itself included) in the radius that make a core point.
+    min_size : clusters with fewer points are dropped, as for the image methods.
+    backend : ``"sklearn"`` (reference) or ``"fastdbscan"`` (module docstring).
+
+    Returns
+    -------
+    (N,) int32, 0 = noise or dropped, 1..K clusters in order of first point.
+    """
+    if points.shape[0] == 0:
+        return np.zeros(0, dtype=np.int32)
+    raw, _ = raw_dbscan(points, eps_m, min_samples, backend)
+    return drop_small(raw + 1, min_size)

@@ -79,13 +79,78 @@ def _row_cos(elevation: np.ndarray, cols: float, width: int) -> np.ndarray:
     return (ce2 * np.cos(cols * 2.0 * np.pi / width) + (1.0 - ce2))[:, None]
 
 
+@dataclass(frozen=True, config=STRICT)
+class Flic:
+    """FLIC as a :class:`flic_cli.methods.base.Method` (see :func:`flic_labels`).
+
+    Attributes
+    ----------
+    threshold_m : distance threshold t, metres.
+    min_size : smallest cluster kept, points of the evaluated set (a pixel counts its points).
+    maps : Map Connections, ``[row_step, col_step]`` or ``[row_step, col_step, row_offset,
+        col_offset]`` each (see :func:`connection_sets`).
+    mc_mode : ``"map"`` (an MC is the sub-image of every step-th row and column) or
+        ``"neighbour"`` (every measurement to its step-th neighbour).
+    backend : ``"numba"`` (the union-find kernel) or ``"scipy"`` (:func:`flic_labels_scipy`,
+        the paper's way: same labels, slower).
+    """
+
+    threshold_m: Annotated[float, Field(gt=0, description="distance threshold t, metres")] = 0.8
+    min_size: Annotated[int, Field(ge=1, description="smallest cluster kept, points")] = 100
+    maps: tuple[tuple[PositiveInt, ...], ...] = ()
+    mc_mode: Literal["map", "neighbour"] = "map"
+    backend: Literal["numba", "scipy"] = "numba"
+    main_param: ClassVar[str] = "threshold_m"
+
+    @field_validator("maps")
+    @classmethod
+    def _check_maps(cls, maps: tuple[tuple[int, ...], ...]) -> tuple[tuple[int, ...], ...]:
+        for m in maps:
+            if len(m) not in (2, 4):
+                raise ValueError(
+                    "a map is [row_step, col_step] or [row_step, col_step, row_offset, "
+                    f"col_offset], got {list(m)}"
+                )
+        return maps
+
+    def segment(
+        self, image: RangeImage, points: np.ndarray, ground: np.ndarray | None
+    ) -> np.ndarray:
+        if self.backend == "scipy":
+            mask = image.ranges > 0 if ground is None else (image.ranges > 0) & ~ground
+            labels = flic_labels_scipy(
+                image.ranges,
+                image.elevation,
+                self.threshold_m,
+                self.min_size,
+                self.maps,
+                self.mc_mode,
+                mask,
+                image.point_counts(),
+            )
+            return image.point_labels(labels)
+        key = (maps_key(self.maps), self.mc_mode)
+        return run_kernel(
+            image.ranges,
+            image.elevation,
+            cached_sets(*key),
+            key,
+            DISTANCE,
+            float(self.threshold_m) ** 2,
+            self.min_size,
+            ground,
+            point_weights(image),
+            image.point_pixel,
+        )
+
+
 def flic_labels_scipy(
     ranges: np.ndarray,
     elevation: np.ndarray,
-    threshold_m: float = 0.8,
-    min_size: int = 100,
-    maps: tuple = (),
-    mc_mode: str = "map",
+    threshold_m: float = Flic.threshold_m,
+    min_size: int = Flic.min_size,
+    maps: tuple = Flic.maps,
+    mc_mode: str = Flic.mc_mode,
     mask: np.ndarray | None = None,
     weights: np.ndarray | None = None,
 ) -> np.ndarray:
@@ -162,10 +227,10 @@ def flic_labels_scipy(
 def flic_labels(
     ranges: np.ndarray,
     elevation: np.ndarray,
-    threshold_m: float = 0.8,
-    min_size: int = 100,
-    maps: tuple = (),
-    mc_mode: str = "map",
+    threshold_m: float = Flic.threshold_m,
+    min_size: int = Flic.min_size,
+    maps: tuple = Flic.maps,
+    mc_mode: str = Flic.mc_mode,
     mask: np.ndarray | None = None,
     weights: np.ndarray | None = None,
 ) -> np.ndarray:
@@ -211,68 +276,3 @@ def flic_labels(
 
 
 BACKENDS = {"numba": flic_labels, "scipy": flic_labels_scipy}
-
-
-@dataclass(frozen=True, config=STRICT)
-class Flic:
-    """FLIC as a :class:`flic_cli.methods.base.Method` (see :func:`flic_labels`).
-
-    Attributes
-    ----------
-    threshold_m : distance threshold t, metres.
-    min_size : smallest cluster kept, points of the evaluated set (a pixel counts its points).
-    maps : Map Connections, ``[row_step, col_step]`` or ``[row_step, col_step, row_offset,
-        col_offset]`` each (see :func:`connection_sets`).
-    mc_mode : ``"map"`` (an MC is the sub-image of every step-th row and column) or
-        ``"neighbour"`` (every measurement to its step-th neighbour).
-    backend : ``"numba"`` (the union-find kernel) or ``"scipy"`` (:func:`flic_labels_scipy`,
-        the paper's way: same labels, slower).
-    """
-
-    threshold_m: Annotated[float, Field(gt=0, description="distance threshold t, metres")] = 0.8
-    min_size: Annotated[int, Field(ge=1, description="smallest cluster kept, points")] = 100
-    maps: tuple[tuple[PositiveInt, ...], ...] = ()
-    mc_mode: Literal["map", "neighbour"] = "map"
-    backend: Literal["numba", "scipy"] = "numba"
-    main_param: ClassVar[str] = "threshold_m"
-
-    @field_validator("maps")
-    @classmethod
-    def _check_maps(cls, maps: tuple[tuple[int, ...], ...]) -> tuple[tuple[int, ...], ...]:
-        for m in maps:
-            if len(m) not in (2, 4):
-                raise ValueError(
-                    "a map is [row_step, col_step] or [row_step, col_step, row_offset, "
-                    f"col_offset], got {list(m)}"
-                )
-        return maps
-
-    def segment(
-        self, image: RangeImage, points: np.ndarray, ground: np.ndarray | None
-    ) -> np.ndarray:
-        if self.backend == "scipy":
-            mask = image.ranges > 0 if ground is None else (image.ranges > 0) & ~ground
-            labels = flic_labels_scipy(
-                image.ranges,
-                image.elevation,
-                self.threshold_m,
-                self.min_size,
-                self.maps,
-                self.mc_mode,
-                mask,
-                image.point_counts(),
-            )
-            return image.point_labels(labels)
-        key = (maps_key(self.maps), self.mc_mode)
-        return run_kernel(
-            image.ranges,
-            image.elevation,
-            cached_sets(*key),
-            key,
-            DISTANCE,
-            float(self.threshold_m) ** 2,
-            self.min_size,
-            ground,
-            point_weights(image),
-            image.point_pixel,
-        )
