@@ -33,8 +33,8 @@ from flic_cli.io import open_dataset  # noqa: E402
 from flic_cli.methods.base import drop_small  # noqa: E402
 from flic_cli.methods.dbscan import raw_dbscan  # noqa: E402
 from flic_cli.metrics import match_objects, summarize  # noqa: E402
-from flic_cli.runs.evaluate import load_labelled_frame  # noqa: E402
 from flic_cli.runs.pipeline import prepare  # noqa: E402
+from flic_cli.runs.scoring import load_labelled_frame  # noqa: E402
 
 
 def differing_points(ref: np.ndarray, other: np.ndarray) -> int:
@@ -63,7 +63,7 @@ def main() -> None:
     ds = open_dataset(args.data)
     rows, ious = [], {"sklearn": [], "fastdbscan": []}
     for ref in tqdm(ds.refs(), unit="frame"):
-        prep = prepare(load_labelled_frame(ref), "no-ground", cfg.get("projection", {}))
+        prep = prepare(load_labelled_frame(ref), "no-ground", cfg.projection)
         pts = prep.points[prep.image.point_pixel >= 0]
         row = {"sequence": ref.sequence, "frame": ref.frame, "points": pts.shape[0]}
         raw, core, final = {}, {}, {}

@@ -217,3 +217,27 @@ def test_speedups_on_few_frames_are_marked_as_indications(small_sample, tmp_path
     text = result.report()
     assert "~: fewer than 30 frames timed (flic0 n = 3, dbscan n = 2)" in text
     assert "e+" not in text.split("speed-up")[1]  # no exponents in the ratios
+
+
+def test_rounds_keep_each_frames_median(small_sample, tmp_path, monkeypatch):
+    """--rounds N: N passes over the selection, each frame's time the median over the passes."""
+    from flic_cli.config import load_config
+    from flic_cli.runs import benchmark
+
+    times = iter([float(t) for t in range(1, 1000)])
+    monkeypatch.setattr(benchmark, "_timed", lambda func, repeat: (func(), 1e6 * next(times)))
+    result = benchmark.run_benchmark(
+        small_sample.moosmann_log,
+        tmp_path / "b",
+        ["flic0"],
+        load_config(),
+        warmup=0,
+        rounds=3,
+        plots=False,
+        progress=False,
+    )
+    flic0 = result.frames[result.frames["method"] == "flic0"]
+    assert len(flic0) == 3 and result.environment["rounds"] == 3
+    # per frame 3 stages (read, project, flic0) per round, 3 frames per round: the calls of a
+    # frame's flic0 are 9 apart, so its median is the middle round's value
+    assert flic0["milliseconds"].tolist() == [12.0, 15.0, 18.0]

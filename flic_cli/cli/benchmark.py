@@ -65,7 +65,18 @@ def benchmark(
         ),
     ] = 3,
     repeat: Annotated[
-        int, typer.Option(min=1, help="Timed runs per frame and method; the median is kept.")
+        int,
+        typer.Option(
+            min=1, help="Timed runs per frame and method, back to back; the median is kept."
+        ),
+    ] = 1,
+    rounds: Annotated[
+        int,
+        typer.Option(
+            min=1,
+            help="Passes over the whole selection; each frame's median over the passes is kept "
+            "(disturbances by other work on a shared machine do not meet every pass).",
+        ),
     ] = 1,
     dbscan_every: Annotated[
         int,
@@ -112,6 +123,7 @@ def benchmark(
         ground_remover=ground_remover,
         warmup=warmup,
         repeat=repeat,
+        rounds=rounds,
         dbscan_every=dbscan_every,
         threads=threads,
         plots=plots,

@@ -12,6 +12,12 @@ Procedure
    extraction included). Methods are interleaved per frame, so slow drifts (thermal, other load)
    affect all of them alike. The garbage collector is disabled during each timed call.
    ``--repeat R`` times each call R times and keeps the median.
+4. ``--rounds N`` times the whole selection N times, one pass after the other, and keeps each
+   frame's median over the passes. On a shared machine, other work slows every call that runs at
+   the same moment (back-to-back repeats included), which shows up as per-frame spikes that are
+   not the method's; passes minutes apart do not meet the same disturbance, so the median over
+   rounds leaves what depends on the frame itself. ``frames.csv`` holds those medians;
+   ``environment.json`` records the rounds.
 3. Methods of kind ``dbscan`` run only on frames whose position in the selection is a multiple of
    ``dbscan_every`` (DBSCAN takes seconds per frame).
 
@@ -181,6 +187,16 @@ class BenchmarkResult:
             lines += self._speedups(methods)
         lines.append(f"wrote {', '.join(p.name for p in self.files)} -> {self.out}")
         return "\n".join(lines)
+
+
+def _median_over_rounds(table: pd.DataFrame) -> pd.DataFrame:
+    """One row per method (or stage) and frame: the median time over the rounds."""
+    keys = ["method", "index", "sequence", "frame"]
+    return table.groupby(keys, sort=False, as_index=False).agg(
+        milliseconds=("milliseconds", "median"),
+        points=("points", "first"),
+        clusters=("clusters", "first"),
+    )[FRAME_COLUMNS]
 
 
 def _significant(value: float, digits: int) -> str:
@@ -380,6 +396,7 @@ def run_benchmark(
     ground_remover: str = "own",
     warmup: int = 3,
     repeat: int = 1,
+    rounds: int = 1,
     dbscan_every: int = 10,
     threads: int = 1,
     plots: bool = True,
@@ -400,7 +417,8 @@ def run_benchmark(
         :func:`flic_cli.runs.pipeline.build_segmenter`).
     warmup : untimed runs of every method on the first frame (0: the first timed frame includes
         compilation).
-    repeat : timed runs per frame and method; the median is kept.
+    repeat : timed runs per frame and method, back to back; the median is kept.
+    rounds : passes over the whole selection; each frame's median over the passes is kept.
     dbscan_every : methods of kind ``dbscan`` run only on frames whose position in the selection
         is a multiple of this.
     threads : threads of numba and the native thread pools during the run.
@@ -413,9 +431,9 @@ def run_benchmark(
     -------
     BenchmarkResult
     """
-    if warmup < 0 or repeat < 1 or dbscan_every < 1 or threads < 1:
+    if warmup < 0 or repeat < 1 or rounds < 1 or dbscan_every < 1 or threads < 1:
         raise FlicInputError(
-            None, "--warmup must be >= 0, --repeat, --dbscan-every and --threads >= 1"
+            None, "--warmup must be >= 0, --repeat, --rounds, --dbscan-every and --threads >= 1"
         )
     clash = [m for m in methods if m in STAGES]
     if clash:
@@ -435,13 +453,16 @@ def run_benchmark(
         warmup,
         repeat,
     )
+    rows: list[tuple] = []
     with thread_limits(threads) as thread_info:
-        loop = FrameLoop(job, refs, skip_bad=skip_bad, desc="benchmark", progress=progress)
-        rows = [row for _, frame_rows in loop for row in frame_rows]
+        for r in range(rounds):
+            desc = "benchmark" if rounds == 1 else f"benchmark, round {r + 1}/{rounds}"
+            loop = FrameLoop(job, refs, skip_bad=skip_bad, desc=desc, progress=progress)
+            rows += [row for _, frame_rows in loop for row in frame_rows]
     every = dict(zip(methods, job.every, strict=True))
     if not rows:
         raise FlicInputError(data, "no frame could be read")
-    table = pd.DataFrame(rows, columns=FRAME_COLUMNS)
+    table = _median_over_rounds(pd.DataFrame(rows, columns=FRAME_COLUMNS))
     table["clusters"] = table["clusters"].astype("Int64").mask(table["clusters"] < 0)
     order = {name: k for k, name in enumerate([*methods, *STAGES])}
     table = table.sort_values(
@@ -481,6 +502,7 @@ def run_benchmark(
         frames_selected=len(refs),
         frames_timed=timed_frames,
         repeat=repeat,
+        rounds=rounds,
         dbscan_every=dbscan_every,
         subsampled={m: every[m] for m in methods if every[m] > 1},
         skipped_frames=[s.line() for s in sort_skipped(loop.skipped)],
