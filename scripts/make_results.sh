@@ -43,6 +43,8 @@ for step in $STEPS; do
     # the estimate of the run's duration it printed before the bulk started
     tr '\r' '\n' < "$LOG.err" | grep '^estimate' > results/evaluate/estimate.txt
     rm -rf results/evaluate/parts
+    # which differences between methods are significant (paired bootstrap over frames)
+    python scripts/paired_differences.py results/evaluate
     ;;
   ground)
     # the ground setting with every other remover (the paper's is in results/evaluate)

@@ -30,6 +30,7 @@ in ``results/ground/``.
 
 from __future__ import annotations
 
+import functools
 from typing import Annotated, Literal
 
 import numpy as np
@@ -50,9 +51,13 @@ REPAIR_DEPTH_M = 1.0
 _EPS = np.float32(0.001)
 
 
+@functools.cache
 def savgol_kernel(window: int) -> np.ndarray:
-    """The quadratic Savitzky-Golay smoothing kernel of ``window`` rows (float32)."""
-    return savgol_coeffs(window, 2).astype(np.float32)
+    """The quadratic Savitzky-Golay smoothing kernel of ``window`` rows (float32, read-only;
+    computed once per window size)."""
+    kernel = savgol_coeffs(window, 2).astype(np.float32)
+    kernel.setflags(write=False)
+    return kernel
 
 
 @njit(cache=True)
