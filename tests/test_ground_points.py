@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 import pytest
 from hypothesis import given, settings
@@ -71,17 +73,53 @@ def test_patchworkpp_removes_a_flat_road_and_keeps_a_box(small_sample):
     assert on[np.isin(sem, [10, 252])].mean() < 0.1  # cars
 
 
-def test_patchworkpp_without_the_package_is_a_one_line_input_error(monkeypatch):
+@pytest.fixture
+def without_optional_packages(monkeypatch):
+    """Python as a plain ``pip install flic`` leaves it: no pypatchworkpp, no dbscan."""
     import builtins
+    import importlib.util
 
+    missing = {"pypatchworkpp", "dbscan"}
     real_import = builtins.__import__
+    real_find_spec = importlib.util.find_spec
 
-    def no_pypatchworkpp(name, *args, **kwargs):
-        if name == "pypatchworkpp":
+    def no_import(name, *args, **kwargs):
+        if name.split(".")[0] in missing:
             raise ImportError(name)
         return real_import(name, *args, **kwargs)
 
-    monkeypatch.setattr(builtins, "__import__", no_pypatchworkpp)
-    with pytest.raises(FlicInputError, match=r"pip install 'flic\[patchworkpp\]'") as info:
-        REMOVERS["patchworkpp"]()
+    def no_spec(name, *args, **kwargs):
+        return None if name.split(".")[0] in missing else real_find_spec(name, *args, **kwargs)
+
+    monkeypatch.setattr(builtins, "__import__", no_import)
+    monkeypatch.setattr(importlib.util, "find_spec", no_spec)
+
+
+def test_without_the_extras_the_shipped_config_loads_and_other_removers_build(
+    without_optional_packages,
+):
+    # The shipped config names every remover and the fastdbscan preset; a plain install (no
+    # extras) must still load it and run everything that does not need them.
+    from flic_cli.config import load_config
+    from flic_cli.runs.pipeline import build_segmenter
+
+    config = load_config()
+    for remover in ("paper", "column", "bogoslavskyi"):
+        seg = build_segmenter(config, "flic14", "ground", remover)
+        assert seg.ground_name == remover
+    assert build_segmenter(config, "dbscan", "ground", "column").method.backend == "sklearn"
+
+
+@pytest.mark.parametrize(
+    ("method", "remover", "hint"),
+    [("flic0", "patchworkpp", "flic[patchworkpp]"), ("dbscan-fast", "paper", "flic[fastdbscan]")],
+)
+def test_a_missing_extra_is_a_one_line_error_when_the_run_is_built(
+    without_optional_packages, method, remover, hint
+):
+    from flic_cli.config import load_config
+    from flic_cli.runs.pipeline import build_segmenter
+
+    with pytest.raises(FlicInputError, match=re.escape(f"pip install '{hint}'")) as info:
+        build_segmenter(load_config(), method, "ground", remover)
     assert "\n" not in str(info.value)

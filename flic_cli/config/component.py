@@ -25,7 +25,24 @@ from pydantic import ConfigDict
 #: ``dataclasses.replace`` too.
 STRICT = ConfigDict(extra="forbid", revalidate_instances="always")
 
-__all__ = ["STRICT"]
+__all__ = ["STRICT", "check_installed"]
+
+
+def check_installed(component: object) -> None:
+    """Fail with the install hint when ``component`` needs an optional package that is missing.
+
+    A component that needs an optional extra defines ``check_installed(self) -> None``; it is
+    called when a run builds the component into its pipeline, not when a config is parsed, so
+    the shipped config (which names every remover and preset) loads without the extras.
+
+    Raises
+    ------
+    FlicInputError
+        From the component's own check.
+    """
+    check = getattr(component, "check_installed", None)
+    if check is not None:
+        check()
 
 
 def describe(exc: Exception) -> str:

@@ -113,8 +113,9 @@ class PatchworkppGround:
     min_range_m: Annotated[float, Field(ge=0, description="metres")] = 2.7
     max_range_m: Annotated[float, Field(gt=0, description="metres")] = 80.0
 
-    def __post_init__(self) -> None:
-        _module()  # fail when the remover is built, with the install hint, not at the first frame
+    def check_installed(self) -> None:
+        """Fail with the install hint when ``pypatchworkpp`` is missing (before the first frame)."""
+        _module()
 
     def __call__(self, image: RangeImage, points: np.ndarray) -> np.ndarray:
         """(H, W) bool ground mask: each pixel takes the decision of the point that owns it."""

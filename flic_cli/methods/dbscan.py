@@ -25,10 +25,11 @@ import importlib.util
 from typing import Annotated, ClassVar, Literal
 
 import numpy as np
-from pydantic import Field, field_validator
+from pydantic import Field
 from pydantic.dataclasses import dataclass
 
 from flic_cli.config.component import STRICT
+from flic_cli.errors import FlicInputError
 from flic_cli.methods.base import drop_small
 from flic_cli.range_image import RangeImage
 
@@ -81,14 +82,13 @@ class Dbscan:
     backend: Literal["sklearn", "fastdbscan"] = "sklearn"
     main_param: ClassVar[str] = "eps_m"
 
-    @field_validator("backend")
-    @classmethod
-    def _check_backend(cls, backend: str) -> str:
-        if backend == "fastdbscan" and importlib.util.find_spec("dbscan") is None:
-            raise ValueError(
-                "backend 'fastdbscan' needs the package dbscan: pip install 'flic[fastdbscan]'"
+    def check_installed(self) -> None:
+        """Fail with the install hint when the chosen backend's package is missing."""
+        if self.backend == "fastdbscan" and importlib.util.find_spec("dbscan") is None:
+            raise FlicInputError(
+                None,
+                "backend 'fastdbscan' needs the package dbscan: pip install 'flic[fastdbscan]'",
             )
-        return backend
 
     def segment(
         self, image: RangeImage, points: np.ndarray, ground: np.ndarray | None

@@ -17,6 +17,7 @@ import numpy as np
 
 from flic_cli.classes import ground_mask
 from flic_cli.config import Config
+from flic_cli.config.component import check_installed
 from flic_cli.errors import FlicInputError
 from flic_cli.io.base import Frame, FrameRef
 from flic_cli.projection import Projection
@@ -229,9 +230,11 @@ def build_segmenter(
     """
     spec = config.method(name)
     check_setting(setting)
+    check_installed(spec.method)
     if setting == "no-ground":
         return Segmenter(name, spec.kind, spec.method, None, None)
     remover = spec.ground if ground_remover == OWN else ground_remover
+    check_installed(config.remover(remover))
     return Segmenter(name, spec.kind, spec.method, remover, config.remover(remover))
 
 
