@@ -102,7 +102,7 @@ def _repair_depth(ranges: np.ndarray, step: int, threshold: float) -> np.ndarray
     return out
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _angle_at(depth: np.ndarray, sin_p: np.ndarray, cos_p: np.ndarray, r: int, c: int):
     """Their ``CreateAngleImage`` at one pixel, float32: row r against row r - 1 (above), with an
     empty pixel at the origin; row 0 is 0."""
@@ -113,7 +113,7 @@ def _angle_at(depth: np.ndarray, sin_p: np.ndarray, cos_p: np.ndarray, r: int, c
     return np.arctan2(dy, dx)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _smooth_at(depth, sin_p, cos_p, kernel, angle, smooth, done, r, c):
     """Savitzky-Golay-smoothed angle at (r, c) (their ``filter2D`` of the column with
     ``BORDER_REFLECT101``), computed on first use: the growth reads only the pixels it reaches
