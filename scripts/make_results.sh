@@ -3,7 +3,9 @@
 # repository root with ../shared beside it and the dev install active:
 #     . .venv/bin/activate && bash scripts/make_results.sh [step ...]
 # Steps: bench evaluate ground sweeps coverage dbscan pictures (default: all, in this order;
-# the benchmarks first, on a quiet machine, since evaluate takes its times from them).
+# the benchmarks first, on a quiet machine, since evaluate takes its times from them), and cpp
+# (not in the default: their C++ against flic; needs DC=<a PRBonn/depth_clustering checkout>
+# and the system packages that scripts/depth_clustering/time_cpp.sh names).
 # On a 2-core machine the whole run takes about half an hour. JOBS sets evaluate's processes.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -85,6 +87,12 @@ for step in $STEPS; do
       cp "$tmp/$method/views_08_000000.png" "results/segment/${method}_08_000000_views.png"
     done
     rm -rf "$tmp"
+    ;;
+  cpp)
+    # Bogoslavskyi & Stachniss' own C++ and flic, alternating in one session, on the log above
+    test -d "$LOG/moosmann" || flic sample "$LOG" --frames 500
+    bash scripts/depth_clustering/compare.sh "${DC:?set DC to a depth_clustering checkout}" \
+      "$LOG/moosmann" results/benchmark/cpp-comparison
     ;;
   *)
     echo "unknown step $step" >&2

@@ -394,12 +394,30 @@ def test_estimate_line() -> None:
         scores = FrameScores("00", 0)
         scores.frames["method"] += ["flic0", "dbscan"]
         scores.frames["seconds"] += [0.002, dbscan]
+        scores.frames["ground_seconds"] += [0.0, 0.0]
         timing.append((wall, scores))
     line = estimate_line(timing, 1000, jobs=4, scheduler=None)
     # median frame 1.2 s, dbscan 0.6 s, flic0 2 ms, the rest the median of 0.498, 0.498, 0.598
     assert line.startswith("estimate from 3 frame(s): 1.2 s per frame (flic0 2 ms, dbscan 600 ms;")
     assert "scoring 500 ms) x 1000 frames = 20.0 min of one worker / 4 processes = 5.0 min" in line
     assert "dask worker threads" in estimate_line(timing, 10, jobs=1, scheduler="tcp://x:1")
+
+
+def test_estimate_line_counts_a_shared_ground_extraction_once() -> None:
+    from flic_cli.runs.evaluate import estimate_line
+    from flic_cli.runs.scoring import FrameScores
+
+    # two methods of 10 ms each, both using one 30 ms ground mask: 1.0 s of wall time is
+    # 20 ms of clustering, 30 ms of ground extraction and 950 ms of the rest
+    scores = FrameScores("00", 0)
+    scores.frames["method"] += ["flic0", "flic14"]
+    scores.frames["seconds"] += [0.040, 0.040]
+    scores.frames["ground_seconds"] += [0.030, 0.030]
+    scores.ground["seconds"].append(0.030)
+    line = estimate_line([(1.0, scores)], 10, jobs=1, scheduler=None)
+    assert "(flic0 40 ms, flic14 40 ms, each with its ground extraction;" in line
+    assert "the ground extraction once per frame 30 ms;" in line
+    assert "reading, projection and scoring 950 ms) x 10 frames = 10 s of one worker" in line
 
 
 def test_table_intervals_hold_the_estimates(reference: Path) -> None:

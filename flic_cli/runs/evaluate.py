@@ -88,12 +88,23 @@ def estimate_line(
             methods.setdefault(name, []).append(seconds)
     methods = {m: [float(np.median(t)) * len(t) / len(timing)] for m, t in methods.items()}
     cost = {m: t[0] for m, t in methods.items()}
-    other = float(np.median([max(t - sum(r.frames["seconds"]), 0.0) for t, r in timing]))
+    # a method's seconds include its remover's mask, which is extracted once per frame and remover
+    # (the ground records) and shared by the methods that use it
+    ground = [sum(r.ground["seconds"]) for _, r in timing]
+    methods_alone = [sum(r.frames["seconds"]) - sum(r.frames["ground_seconds"]) for _, r in timing]
+    walls = [t for t, _ in timing]
+    rest = [max(t - m - g, 0.0) for t, m, g in zip(walls, methods_alone, ground, strict=True)]
+    other = float(np.median(rest))
     parts = ", ".join(f"{m} {_duration(t)}" for m, t in cost.items())
+    if any(ground):
+        parts += (
+            f", each with its ground extraction; the ground extraction once per frame "
+            f"{_duration(float(np.median(ground)))}"
+        )
     total = per_frame * remaining
     line = (
         f"estimate from {len(timing)} frame(s): {_duration(per_frame)} per frame ({parts}; "
-        f"reading, projection, ground and scoring {_duration(other)}) x {remaining} frames = "
+        f"reading, projection and scoring {_duration(other)}) x {remaining} frames = "
         f"{_duration(total)} of one worker"
     )
     if scheduler is not None:

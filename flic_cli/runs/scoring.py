@@ -62,6 +62,7 @@ FRAME_COLUMNS: tuple[str, ...] = (
     "over_segmented",
     "under_segmented",
     "seconds",
+    "ground_seconds",
     "pq_tp",
     "pq_fp",
     "pq_fn",
@@ -167,7 +168,7 @@ class ScoreJob:
                 start = time.perf_counter()
                 labels = seg.method.segment(prep.image, prep.points, ground)
                 seconds = time.perf_counter() - start + ground_seconds
-                add_scores(out, seg.name, setting, prep, labels, seconds)
+                add_scores(out, seg.name, setting, prep, labels, seconds, ground_seconds)
             grounds.add_records(out)
         if self.oracle:
             out.panoptic = oracle_panoptic(frame, self.segmenters[0][1], self.projection)
@@ -250,8 +251,13 @@ def add_scores(
     prep: Prepared,
     labels: np.ndarray,
     seconds: float,
+    ground_seconds: float = 0.0,
 ) -> None:
-    """Append one method's per-object and per-frame records of one prepared frame."""
+    """Append one method's per-object and per-frame records of one prepared frame.
+
+    ``seconds`` is the method's time with its ground extraction, ``ground_seconds`` the latter's
+    part (extracted once per remover and frame, counted in every method that uses it).
+    """
     assert prep.labels is not None  # load_labelled_frame guarantees labels
     matches, stats = score_frame(prep.labels, labels, prep.points)
     pq = agnostic_panoptic_counts(prep.labels, labels)
@@ -281,6 +287,7 @@ def add_scores(
         ("over_segmented", stats["over_segmented"]),
         ("under_segmented", stats["under_segmented"]),
         ("seconds", round(seconds, 6)),
+        ("ground_seconds", round(ground_seconds, 6)),
         ("pq_tp", int(pq.tp[0])),
         ("pq_fp", int(pq.fp[0])),
         ("pq_fn", int(pq.fn[0])),

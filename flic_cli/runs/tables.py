@@ -134,6 +134,7 @@ def frame_dtypes(methods: list[str], settings: tuple[str, ...], seqs: list[str])
         "over_segmented": "int64",
         "under_segmented": "int64",
         "seconds": "float64",
+        "ground_seconds": "float64",
         "pq_tp": "int64",
         "pq_fp": "int64",
         "pq_fn": "int64",
