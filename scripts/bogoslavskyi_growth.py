@@ -1,0 +1,78 @@
+"""Where the time of Bogoslavskyi's ground remover goes, frame by frame (in-painting, growth).
+
+For the given frames of a log: valid pixels, the share of pixels the growth labels as ground, and
+the median time of the in-painting and of the growth over ``--calls`` calls each (one thread).
+The growth's cost follows the ground it reaches, so this shows whether a frame is slow because
+of its content or because of the machine.
+
+Usage: python scripts/bogoslavskyi_growth.py LOG --frames 2,28,101,250 [--calls 50]
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+from pathlib import Path
+
+import numpy as np
+
+from flic_cli.config import load_config
+from flic_cli.ground.bogoslavskyi import (
+    REPAIR_DEPTH_M,
+    REPAIR_STEP,
+    BogoslavskyiGround,
+    _grow_and_shift,
+    _repair_depth,
+    savgol_kernel,
+)
+from flic_cli.io import open_dataset
+from flic_cli.runs.environment import thread_limits
+from flic_cli.runs.pipeline import prepare
+
+
+def _median_ms(fn, calls: int) -> float:
+    times = []
+    for _ in range(calls):
+        start = time.perf_counter()
+        fn()
+        times.append(time.perf_counter() - start)
+    return 1000.0 * float(np.median(times))
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("log", type=Path)
+    parser.add_argument("--frames", required=True, help="comma-separated frame numbers")
+    parser.add_argument("--calls", type=int, default=50)
+    args = parser.parse_args()
+    with thread_limits(1):
+        run(args.log, [int(f) for f in args.frames.split(",")], args.calls)
+
+
+def run(log: Path, frames: list[int], calls: int) -> None:
+    cfg = load_config()
+    ds = open_dataset(log)
+    refs = {ref.frame: ref for ref in ds.refs()}
+    remover = BogoslavskyiGround()
+    kernel = savgol_kernel(remover.window)
+    threshold = float(np.float32(np.radians(remover.angle_deg)))
+    start = float(np.radians(remover.start_angle_deg))
+    print("frame,valid_share,ground_share,inpainting_ms,growth_ms")
+    for frame in frames:
+        image = prepare(ds.load(refs[frame]), "ground", cfg.projection).image
+        ranges = np.ascontiguousarray(image.ranges, dtype=np.float32)
+        pitch = (-np.asarray(image.elevation, dtype=np.float64)).astype(np.float32)
+        sin_p, cos_p = np.sin(pitch), np.cos(pitch)
+        depth = _repair_depth(ranges, REPAIR_STEP, REPAIR_DEPTH_M)
+        ground = _grow_and_shift(depth, sin_p, cos_p, kernel, threshold, start)  # compiles
+        repair = _median_ms(lambda r=ranges: _repair_depth(r, REPAIR_STEP, REPAIR_DEPTH_M), calls)
+        grow = _median_ms(
+            lambda d=depth, s=sin_p, c=cos_p: _grow_and_shift(d, s, c, kernel, threshold, start),
+            calls,
+        )
+        valid = float((ranges > 0).mean())
+        print(f"{frame},{valid:.3f},{float(ground.mean()):.3f},{repair:.3f},{grow:.3f}")
+
+
+if __name__ == "__main__":
+    main()
