@@ -241,6 +241,18 @@ CASES = [
         _config("[methods.flic0]\nmaps = [[2, 2, 1]]\n"),
     ),
     Case(
+        "cfg-map-step-0",
+        [*SEG, "--config", "{cfg}"],
+        ["my.toml", "maps", "steps >= 1"],
+        _config("[methods.flic0]\nmaps = [[0, 2]]\n"),
+    ),
+    Case(
+        "cfg-map-negative-offset",
+        [*SEG, "--config", "{cfg}"],
+        ["my.toml", "maps"],
+        _config("[methods.flic0]\nmaps = [[2, 2, -1, 0]]\n"),
+    ),
+    Case(
         "cfg-bad-mc-mode",
         [*SEG, "--config", "{cfg}"],
         ["my.toml", "mc_mode"],

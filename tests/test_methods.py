@@ -441,3 +441,19 @@ def test_segment_gives_the_labels_of_the_previous_kernel_on_the_shared_frames(ki
     assert _same_labels_as_before(kitti_root, methods, settings_) == 50 * 5 * 3
     # the neighbour reading (slower) on a few frames
     assert _same_labels_as_before(kitti_root, ("flic14n",), settings_[:1], frames=5) == 5
+
+
+def test_the_shipped_example_config_loads_and_its_map_offsets_are_used():
+    # configs/example.toml is what the README points users to; a map with an offset of 0 was
+    # once refused there (offsets were validated as steps)
+    from pathlib import Path
+
+    from flic_cli.config import load_config
+    from flic_cli.methods.flic import connection_sets
+
+    example = Path(__file__).resolve().parents[1] / "configs" / "example.toml"
+    mine = load_config(example).method("mine").method
+    assert mine.maps == ((3, 1), (1, 3, 0, 1)) and mine.threshold_m == 0.6
+    steps, offsets, _ = connection_sets(mine.maps, mine.mc_mode)
+    assert steps.tolist() == [[1, 1], [3, 1], [1, 3]]
+    assert offsets.tolist() == [[0, 0], [0, 0], [0, 1]]

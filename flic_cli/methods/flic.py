@@ -6,7 +6,7 @@ from functools import lru_cache
 from typing import Annotated, ClassVar, Literal
 
 import numpy as np
-from pydantic import Field, PositiveInt, field_validator
+from pydantic import Field, NonNegativeInt, field_validator
 from pydantic.dataclasses import dataclass
 
 from flic_cli.config.component import STRICT
@@ -97,7 +97,7 @@ class Flic:
 
     threshold_m: Annotated[float, Field(gt=0, description="distance threshold t, metres")] = 0.8
     min_size: Annotated[int, Field(ge=1, description="smallest cluster kept, points")] = 100
-    maps: tuple[tuple[PositiveInt, ...], ...] = ()
+    maps: tuple[tuple[NonNegativeInt, ...], ...] = ()
     mc_mode: Literal["map", "neighbour"] = "map"
     backend: Literal["numba", "scipy"] = "numba"
     main_param: ClassVar[str] = "threshold_m"
@@ -106,10 +106,10 @@ class Flic:
     @classmethod
     def _check_maps(cls, maps: tuple[tuple[int, ...], ...]) -> tuple[tuple[int, ...], ...]:
         for m in maps:
-            if len(m) not in (2, 4):
+            if len(m) not in (2, 4) or m[0] < 1 or m[1] < 1:
                 raise ValueError(
                     "a map is [row_step, col_step] or [row_step, col_step, row_offset, "
-                    f"col_offset], got {list(m)}"
+                    f"col_offset] with steps >= 1 and offsets >= 0, got {list(m)}"
                 )
         return maps
 
