@@ -1,5 +1,6 @@
-// Driver (not part of flic): runs depth_clustering's DepthGroundRemover and ImageBasedClusterer
-// on a Moosmann-style log. Modes:
+// Measurement driver (ours; not part of the flic package): runs PRBonn/depth_clustering's
+// DepthGroundRemover and ImageBasedClusterer on a Moosmann-style log. Their code is built outside
+// the project from a checkout (time_cpp.sh shows how). Modes:
 //   driver dump LOG OUT [fix]   : write per frame OUT/NNNNN.ground (uint8 H*W) and .repaired (float32)
 //   driver time LOG REPEAT [fix]: per-frame microseconds of ground+clustering and clustering alone
 #include <cstdio>
