@@ -238,6 +238,10 @@ def test_rounds_keep_each_frames_median(small_sample, tmp_path, monkeypatch):
     )
     flic0 = result.frames[result.frames["method"] == "flic0"]
     assert len(flic0) == 3 and result.environment["rounds"] == 3
-    # per frame 3 stages (read, project, flic0) per round, 3 frames per round: the calls of a
-    # frame's flic0 are 9 apart, so its median is the middle round's value
-    assert flic0["milliseconds"].tolist() == [12.0, 15.0, 18.0]
+    # every round has a pass for the stages (read, project: calls 1-6 in round 1) and one for
+    # flic0 (read, project, flic0 per frame), in turns: round 1 stages then flic0 (its calls 9,
+    # 12, 15), round 2 flic0 (18, 21, 24) then the stages (25-30), round 3 stages (31-36) then
+    # flic0 (39, 42, 45); each frame's time is its median over the rounds, the round 2 value
+    assert flic0["milliseconds"].tolist() == [18.0, 21.0, 24.0]
+    reads = result.frames[result.frames["method"] == "read"]["milliseconds"].tolist()
+    assert reads == [25.0, 27.0, 29.0]  # stage passes only: (1, 25, 31), (3, 27, 33), ...

@@ -6,20 +6,24 @@ Procedure
    compilation (or loading the compiled kernels from numba's on-disk cache) and first-use imports
    are not timed. The first call's time is recorded separately ("first call incl. JIT/cache
    load").
-2. Timing, frame after frame (memory stays bounded on long logs): the frame is read (stage
-   ``read``) and projected to its range image (stage ``project``), each timed on its own; then
-   every method segments it (``segmenter(image, points)``: range image in, labels out, ground
-   extraction included). Methods are interleaved per frame, so slow drifts (thermal, other load)
-   affect all of them alike. The garbage collector is disabled during each timed call.
-   ``--repeat R`` times each call R times and keeps the median.
-4. ``--rounds N`` times the whole selection N times, one pass after the other, and keeps each
-   frame's median over the passes. On a shared machine, other work slows every call that runs at
-   the same moment (back-to-back repeats included), which shows up as per-frame spikes that are
-   not the method's; passes minutes apart do not meet the same disturbance, so the median over
-   rounds leaves what depends on the frame itself. ``frames.csv`` holds those medians;
-   ``environment.json`` records the rounds.
+2. Timing, one pass over the frames per method: every frame is read and projected to its range
+   image, then the method segments it (``segmenter(image, points)``: range image in, labels out,
+   ground extraction included) and only that call is timed. Reading (stage ``read``) and the
+   projection (stage ``project``) are timed in a pass of their own. Every method thus runs as it
+   would in a pipeline, right after its frame was read, and no method runs in the caches and
+   the allocator state that another left behind (with the methods interleaved per frame, the
+   frames after each DBSCAN frame were up to a third slower: Bogoslavskyi 0.270 against
+   0.204 ms per 870 x 64 frame).
+   The garbage collector is disabled during each timed call. ``--repeat R`` times each call R
+   times and keeps the median.
 3. Methods of kind ``dbscan`` run only on frames whose position in the selection is a multiple of
    ``dbscan_every`` (DBSCAN takes seconds per frame).
+4. ``--rounds N`` makes N rounds of these passes, the order of the passes turned by one each
+   round, and keeps each frame's median over the rounds. On a shared machine, other work slows
+   every call that runs at the same moment (back-to-back repeats included), which shows up as
+   per-frame spikes that are not the method's; passes minutes apart do not meet the same
+   disturbance, so the median over rounds leaves what depends on the frame itself.
+   ``frames.csv`` holds those medians; ``environment.json`` records the rounds.
 
 Everything runs single-threaded unless ``threads`` says otherwise (numba and the native thread
 pools are limited, see :mod:`flic_cli.runs.environment`).
@@ -319,11 +323,12 @@ def _plots(frames: pd.DataFrame, methods: list[str], out: Path, title: str) -> l
 
 
 class BenchJob:
-    """Times one frame: reading, projection, then every method (in this process only).
+    """Times one frame: reading and projection (when ``stages``), then its methods (in this
+    process only).
 
     On the first frame that loads, every method first runs ``warmup`` untimed times (JIT
     compilation or numba's on-disk cache load, first-use imports); the first call's time is kept
-    apart. Methods are interleaved per frame so that slow drifts affect all alike.
+    apart. :func:`run_benchmark` gives every method a job (and a pass over the frames) of its own.
     Returns the frame's rows of ``frames.csv``.
     """
 
@@ -337,6 +342,7 @@ class BenchJob:
         index: dict[FrameRef, int],
         warmup: int,
         repeat: int,
+        stages: bool = True,
     ) -> None:
         self.dataset = dataset
         self.segmenters = segmenters
@@ -346,6 +352,7 @@ class BenchJob:
         self.index = index
         self.warmup = warmup
         self.repeat = repeat
+        self.stages = stages
         self.first_call: dict[str, float] = {}
         self.warm_ms: dict[str, float] = {}
         self.warm_frame: dict[str, Any] | None = None
@@ -372,10 +379,12 @@ class BenchJob:
         frame, ns_read = _timed(lambda: self.dataset.load(ref), 1)
         prep, ns_proj = _timed(lambda: prepare(frame, self.setting, self.projection), self.repeat)
         n_points = int(prep.points.shape[0])
-        rows = [
-            ("read", index, ref.sequence, ref.frame, ns_read / 1e6, prep.n_scan, -1),
-            ("project", index, ref.sequence, ref.frame, ns_proj / 1e6, n_points, -1),
-        ]
+        rows = []
+        if self.stages:
+            rows += [
+                ("read", index, ref.sequence, ref.frame, ns_read / 1e6, prep.n_scan, -1),
+                ("project", index, ref.sequence, ref.frame, ns_proj / 1e6, n_points, -1),
+            ]
         for seg, every in zip(self.segmenters, self.every, strict=True):
             if index % every:
                 continue
@@ -443,23 +452,45 @@ def run_benchmark(
     refs = ds.refs()
     out = check_output_dir(Path(out), ds.folders())
     segs = build_segmenters(config, methods, setting, ground_remover)
-    job = BenchJob(
-        ds,
-        tuple(segs),
-        tuple(dbscan_every if s.kind == "dbscan" else 1 for s in segs),
-        setting,
-        config.projection,
-        {r: k for k, r in enumerate(refs)},
-        warmup,
-        repeat,
-    )
+    index = {r: k for k, r in enumerate(refs)}
+    every = {s.name: dbscan_every if s.kind == "dbscan" else 1 for s in segs}
+
+    def job(segs: tuple[Segmenter, ...]) -> BenchJob:
+        return BenchJob(
+            ds,
+            segs,
+            tuple(every[s.name] for s in segs),
+            setting,
+            config.projection,
+            index,
+            warmup,
+            repeat,
+            stages=not segs,
+        )
+
+    # one job per method, and one for the stages alone: every method gets a pass of its own
+    jobs = {None: job(())} | {s.name: job((s,)) for s in segs}
+    names = list(jobs)
     rows: list[tuple] = []
     with thread_limits(threads) as thread_info:
         for r in range(rounds):
-            desc = "benchmark" if rounds == 1 else f"benchmark, round {r + 1}/{rounds}"
-            loop = FrameLoop(job, refs, skip_bad=skip_bad, desc=desc, progress=progress)
-            rows += [row for _, frame_rows in loop for row in frame_rows]
-    every = dict(zip(methods, job.every, strict=True))
+            # the order of the passes turns by one every round (slow drifts meet each in turn)
+            for name in names[r % len(names) :] + names[: r % len(names)]:
+                what = "read + project" if name is None else name
+                desc = f"benchmark {what}" + (f", round {r + 1}/{rounds}" if rounds > 1 else "")
+                step = 1 if name is None else every[name]
+                selected = [ref for ref in refs if index[ref] % step == 0]
+                loop = FrameLoop(
+                    jobs[name], selected, skip_bad=skip_bad, desc=desc, progress=progress
+                )
+                rows += [row for _, frame_rows in loop for row in frame_rows]
+    first_call: dict[str, float] = {}  # the stages' first call is the first job's (imports)
+    warm_ms: dict[str, float] = {}
+    for j in jobs.values():
+        for k, v in j.first_call.items():
+            first_call.setdefault(k, v)
+        warm_ms |= j.warm_ms
+    warm_frame = next((j.warm_frame for j in jobs.values() if j.warm_frame), None)
     if not rows:
         raise FlicInputError(data, "no frame could be read")
     table = _median_over_rounds(pd.DataFrame(rows, columns=FRAME_COLUMNS))
@@ -508,9 +539,9 @@ def run_benchmark(
         skipped_frames=[s.line() for s in sort_skipped(loop.skipped)],
         warmup={
             "runs": warmup,
-            "frame": job.warm_frame,
-            "first_call_ms": job.first_call,
-            "last_warmup_ms": job.warm_ms,
+            "frame": warm_frame,
+            "first_call_ms": first_call,
+            "last_warmup_ms": warm_ms,
             "note": "first call incl. JIT compilation / on-disk cache load; not in the statistics",
         },
     )
