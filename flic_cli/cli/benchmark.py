@@ -74,8 +74,9 @@ def benchmark(
         int,
         typer.Option(
             min=1,
-            help="Passes over the whole selection; each frame's median over the passes is kept "
-            "(disturbances by other work on a shared machine do not meet every pass).",
+            help="Rounds of passes over the selection (one pass per method, the order turned "
+            "each round); each frame's median over the rounds is kept (disturbances by other "
+            "work on a shared machine do not meet every round).",
         ),
     ] = 1,
     dbscan_every: Annotated[
@@ -96,10 +97,11 @@ def benchmark(
     skip_bad: SkipBadOpt = False,
 ) -> None:
     """Time the segmentation of every frame (range image in, labels out, ground extraction
-    included), single-threaded, after a warm-up; file reading and projection are timed as
-    separate stages. Writes `frames.csv`, `summary.csv` (median/mean/p5/p95/p99/max in ms, Hz,
-    p99/median stability, speed-ups), `histogram.csv`, `environment.json` and the plots of the
-    paper's Fig. 9 and 10 into OUT."""
+    included), single-threaded, after a warm-up, each method in a pass over the frames of its
+    own (as in a pipeline: the frame read, then the method); file reading and projection are
+    timed as separate stages. Writes `frames.csv`, `summary.csv` (median/mean/p5/p95/p99/max
+    in ms, Hz, p99/median stability, speed-ups), `histogram.csv`, `environment.json` and the
+    plots of the paper's Fig. 9 and 10 into OUT."""
     # Before numpy/numba are imported: their thread pools read these variables once.
     from flic_cli.runs.environment import pin_thread_env
 
