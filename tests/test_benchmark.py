@@ -238,10 +238,10 @@ def test_rounds_keep_each_frames_median(small_sample, tmp_path, monkeypatch):
     )
     flic0 = result.frames[result.frames["method"] == "flic0"]
     assert len(flic0) == 3 and result.environment["rounds"] == 3
-    # every round has a pass for the stages (read, project: calls 1-6 in round 1) and one for
-    # flic0 (read, project, flic0 per frame), in turns: round 1 stages then flic0 (its calls 9,
-    # 12, 15), round 2 flic0 (18, 21, 24) then the stages (25-30), round 3 stages (31-36) then
-    # flic0 (39, 42, 45); each frame's time is its median over the rounds, the round 2 value
-    assert flic0["milliseconds"].tolist() == [18.0, 21.0, 24.0]
+    # every round has a pass for the stages (read and project per frame: calls 1-6 in round 1)
+    # and one for flic0 (only flic0 is timed), in turns: round 1 stages then flic0 (calls 7, 8,
+    # 9), round 2 flic0 (10, 11, 12) then the stages (13-18), round 3 stages (19-24) then flic0
+    # (25, 26, 27); each frame's time is its median over the rounds, the round 2 value
+    assert flic0["milliseconds"].tolist() == [10.0, 11.0, 12.0]
     reads = result.frames[result.frames["method"] == "read"]["milliseconds"].tolist()
-    assert reads == [25.0, 27.0, 29.0]  # stage passes only: (1, 25, 31), (3, 27, 33), ...
+    assert reads == [13.0, 15.0, 17.0]  # the stage passes' reads: (1, 13, 19), (3, 15, 21), ...

@@ -40,9 +40,7 @@ def connection_sets(
     steps = [(1, 1)]
     offsets = [(0, 0)]
     for m in maps:
-        m = tuple(int(v) for v in m)
-        if len(m) not in (2, 4) or m[0] < 1 or m[1] < 1:
-            raise ValueError(f"a map is (row_step, col_step[, row_offset, col_offset]), got {m}")
+        m = check_map(m)
         steps.append(m[:2])
         offsets.append(m[2:] if len(m) == 4 else (0, 0))
     lattice = [True] + [mc_mode == "map"] * len(maps)
@@ -51,6 +49,18 @@ def connection_sets(
         np.array(offsets, dtype=np.int64),
         np.array(lattice, dtype=np.bool_),
     )
+
+
+def check_map(m: tuple | list) -> tuple[int, ...]:
+    """One Map Connection as ints: ``(row_step, col_step[, row_offset, col_offset])``, steps
+    >= 1, offsets >= 0; ValueError otherwise."""
+    m = tuple(int(v) for v in m)
+    if len(m) not in (2, 4) or min(m[:2]) < 1 or min(m[2:], default=0) < 0:
+        raise ValueError(
+            "a map is [row_step, col_step] or [row_step, col_step, row_offset, col_offset] "
+            f"with steps >= 1 and offsets >= 0, got {list(m)}"
+        )
+    return m
 
 
 def maps_key(maps: tuple | list) -> tuple[tuple[int, ...], ...]:
@@ -106,11 +116,7 @@ class Flic:
     @classmethod
     def _check_maps(cls, maps: tuple[tuple[int, ...], ...]) -> tuple[tuple[int, ...], ...]:
         for m in maps:
-            if len(m) not in (2, 4) or m[0] < 1 or m[1] < 1:
-                raise ValueError(
-                    "a map is [row_step, col_step] or [row_step, col_step, row_offset, "
-                    f"col_offset] with steps >= 1 and offsets >= 0, got {list(m)}"
-                )
+            check_map(m)
         return maps
 
     def segment(

@@ -323,10 +323,10 @@ def _plots(frames: pd.DataFrame, methods: list[str], out: Path, title: str) -> l
 
 
 class BenchJob:
-    """Times one frame: reading and projection (when ``stages``), then its methods (in this
-    process only).
+    """Times one frame: reading and projection when ``segmenter`` is None, else the segmenter
+    alone (in this process only).
 
-    On the first frame that loads, every method first runs ``warmup`` untimed times (JIT
+    On the first frame that loads, the segmenter first runs ``warmup`` untimed times (JIT
     compilation or numba's on-disk cache load, first-use imports); the first call's time is kept
     apart. :func:`run_benchmark` gives every method a job (and a pass over the frames) of its own.
     Returns the frame's rows of ``frames.csv``.
@@ -335,24 +335,20 @@ class BenchJob:
     def __init__(
         self,
         dataset: Any,
-        segmenters: tuple[Segmenter, ...],
-        every: tuple[int, ...],
+        segmenter: Segmenter | None,
         setting: str,
         projection: Projection,
         index: dict[FrameRef, int],
         warmup: int,
         repeat: int,
-        stages: bool = True,
     ) -> None:
         self.dataset = dataset
-        self.segmenters = segmenters
-        self.every = every
+        self.segmenter = segmenter
         self.setting = setting
         self.projection = projection
         self.index = index
         self.warmup = warmup
         self.repeat = repeat
-        self.stages = stages
         self.first_call: dict[str, float] = {}
         self.warm_ms: dict[str, float] = {}
         self.warm_frame: dict[str, Any] | None = None
@@ -364,9 +360,10 @@ class BenchJob:
         prep = prepare(frame, self.setting, self.projection)
         t2 = time.perf_counter_ns()
         self.first_call = {"read": (t1 - t0) / 1e6, "project": (t2 - t1) / 1e6}
-        for seg in self.segmenters:
+        seg = self.segmenter
+        if seg is not None:
             for k in range(self.warmup):
-                _, ns = _timed(lambda seg=seg: seg(prep.image, prep.points), 1)
+                _, ns = _timed(lambda: seg(prep.image, prep.points), 1)
                 if k == 0:
                     self.first_call[seg.name] = ns / 1e6
                 self.warm_ms[seg.name] = ns / 1e6
@@ -376,22 +373,19 @@ class BenchJob:
         if self.warm_frame is None and self.warmup > 0:
             self._warm_up(ref)
         index = self.index[ref]
+        seg = self.segmenter
+        if seg is not None:  # the frame as a pipeline has it, then only the method is timed
+            prep = prepare(self.dataset.load(ref), self.setting, self.projection)
+            (labels, _), ns = _timed(lambda: seg(prep.image, prep.points), self.repeat)
+            n, clusters = int(prep.points.shape[0]), int(labels.max(initial=0))
+            return [(seg.name, index, ref.sequence, ref.frame, ns / 1e6, n, clusters)]
         frame, ns_read = _timed(lambda: self.dataset.load(ref), 1)
         prep, ns_proj = _timed(lambda: prepare(frame, self.setting, self.projection), self.repeat)
-        n_points = int(prep.points.shape[0])
-        rows = []
-        if self.stages:
-            rows += [
-                ("read", index, ref.sequence, ref.frame, ns_read / 1e6, prep.n_scan, -1),
-                ("project", index, ref.sequence, ref.frame, ns_proj / 1e6, n_points, -1),
-            ]
-        for seg, every in zip(self.segmenters, self.every, strict=True):
-            if index % every:
-                continue
-            (labels, _), ns = _timed(lambda seg=seg: seg(prep.image, prep.points), self.repeat)
-            clusters = int(labels.max(initial=0))
-            rows.append((seg.name, index, ref.sequence, ref.frame, ns / 1e6, n_points, clusters))
-        return rows
+        n = int(prep.points.shape[0])
+        return [
+            ("read", index, ref.sequence, ref.frame, ns_read / 1e6, prep.n_scan, -1),
+            ("project", index, ref.sequence, ref.frame, ns_proj / 1e6, n, -1),
+        ]
 
 
 def run_benchmark(
@@ -455,21 +449,11 @@ def run_benchmark(
     index = {r: k for k, r in enumerate(refs)}
     every = {s.name: dbscan_every if s.kind == "dbscan" else 1 for s in segs}
 
-    def job(segs: tuple[Segmenter, ...]) -> BenchJob:
-        return BenchJob(
-            ds,
-            segs,
-            tuple(every[s.name] for s in segs),
-            setting,
-            config.projection,
-            index,
-            warmup,
-            repeat,
-            stages=not segs,
-        )
-
-    # one job per method, and one for the stages alone: every method gets a pass of its own
-    jobs = {None: job(())} | {s.name: job((s,)) for s in segs}
+    # one job per method, and one (None) for reading and projection: each has a pass of its own
+    jobs = {
+        name: BenchJob(ds, seg, setting, config.projection, index, warmup, repeat)
+        for name, seg in [(None, None), *((s.name, s) for s in segs)]
+    }
     names = list(jobs)
     rows: list[tuple] = []
     with thread_limits(threads) as thread_info:
