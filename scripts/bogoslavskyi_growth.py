@@ -5,7 +5,10 @@ the median time of the in-painting and of the growth over ``--calls`` calls each
 The growth's cost follows the ground it reaches, so this shows whether a frame is slow because
 of its content or because of the machine.
 
-Usage: python scripts/bogoslavskyi_growth.py LOG --frames 2,28,101,250 [--calls 50]
+Usage: python scripts/bogoslavskyi_growth.py DATA --frames 2,28,101,250 [--sequence 08] [--calls 50]
+
+DATA is a Moosmann log or a SemanticKITTI root (then ``--sequence`` picks the sequence). With
+``PYTHONPATH`` pointing at another checkout's tree the same script times that version.
 """
 
 from __future__ import annotations
@@ -44,14 +47,15 @@ def main() -> None:
     parser.add_argument("log", type=Path)
     parser.add_argument("--frames", required=True, help="comma-separated frame numbers")
     parser.add_argument("--calls", type=int, default=50)
+    parser.add_argument("--sequence", default=None, help="SemanticKITTI sequence")
     args = parser.parse_args()
     with thread_limits(1):
-        run(args.log, [int(f) for f in args.frames.split(",")], args.calls)
+        run(args.log, [int(f) for f in args.frames.split(",")], args.calls, args.sequence)
 
 
-def run(log: Path, frames: list[int], calls: int) -> None:
+def run(log: Path, frames: list[int], calls: int, sequence: str | None) -> None:
     cfg = load_config()
-    ds = open_dataset(log)
+    ds = open_dataset(log, [sequence] if sequence else None)
     refs = {ref.frame: ref for ref in ds.refs()}
     remover = BogoslavskyiGround()
     kernel = savgol_kernel(remover.window)
