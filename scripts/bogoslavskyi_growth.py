@@ -1,9 +1,10 @@
-"""Where the time of Bogoslavskyi's ground remover goes, frame by frame (in-painting, growth).
+"""Where the time of Bogoslavskyi's ground remover goes, frame by frame.
 
 For the given frames of a log: valid pixels, the share of pixels the growth labels as ground, and
-the median time of the in-painting and of the growth over ``--calls`` calls each (one thread).
-The growth's cost follows the ground it reaches, so this shows whether a frame is slow because
-of its content or because of the machine.
+the median time over ``--calls`` calls each (one thread) of its three calls: the in-painting with
+the legs of the angles, the arctangents, and the smoothing with the growth and shift. The
+growth's cost follows the ground it reaches, so this shows whether a frame is slow because of
+its content or because of the machine.
 
 Usage: python scripts/bogoslavskyi_growth.py DATA --frames 2,28,101,250 [--sequence 08] [--calls 50]
 
@@ -21,11 +22,10 @@ import numpy as np
 
 from flic_cli.config import load_config
 from flic_cli.ground.bogoslavskyi import (
-    REPAIR_DEPTH_M,
-    REPAIR_STEP,
     BogoslavskyiGround,
-    _grow_and_shift,
-    _repair_depth,
+    _repair_and_legs,
+    _row_trig,
+    _smooth_grow_shift,
     savgol_kernel,
 )
 from flic_cli.io import open_dataset
@@ -61,21 +61,24 @@ def run(log: Path, frames: list[int], calls: int, sequence: str | None) -> None:
     kernel = savgol_kernel(remover.window)
     threshold = float(np.float32(np.radians(remover.angle_deg)))
     start = float(np.radians(remover.start_angle_deg))
-    print("frame,valid_share,ground_share,inpainting_ms,growth_ms")
+    print("frame,valid_share,ground_share,inpainting_and_legs_ms,arctan2_ms,growth_ms")
     for frame in frames:
         image = prepare(ds.load(refs[frame]), "ground", cfg.projection).image
         ranges = np.ascontiguousarray(image.ranges, dtype=np.float32)
-        pitch = (-np.asarray(image.elevation, dtype=np.float64)).astype(np.float32)
-        sin_p, cos_p = np.sin(pitch), np.cos(pitch)
-        depth = _repair_depth(ranges, REPAIR_STEP, REPAIR_DEPTH_M)
-        ground = _grow_and_shift(depth, sin_p, cos_p, kernel, threshold, start)  # compiles
-        repair = _median_ms(lambda r=ranges: _repair_depth(r, REPAIR_STEP, REPAIR_DEPTH_M), calls)
+        sin_p, cos_p = _row_trig(np.asarray(image.elevation, dtype=np.float64).tobytes())
+        depth, dy, dx = _repair_and_legs(ranges, sin_p, cos_p)
+        angle = np.arctan2(dy, dx)
+        ground = _smooth_grow_shift(ranges, depth, angle, kernel, threshold, start)  # compiles
+        legs = _median_ms(lambda r=ranges, s=sin_p, c=cos_p: _repair_and_legs(r, s, c), calls)
+        atan = _median_ms(lambda y=dy, x=dx: np.arctan2(y, x), calls)
         grow = _median_ms(
-            lambda d=depth, s=sin_p, c=cos_p: _grow_and_shift(d, s, c, kernel, threshold, start),
+            lambda r=ranges, d=depth, a=angle: _smooth_grow_shift(
+                r, d, a, kernel, threshold, start
+            ),
             calls,
         )
         valid = float((ranges > 0).mean())
-        print(f"{frame},{valid:.3f},{float(ground.mean()):.3f},{repair:.3f},{grow:.3f}")
+        print(f"{frame},{valid:.3f},{float(ground.mean()):.3f},{legs:.3f},{atan:.3f},{grow:.3f}")
 
 
 if __name__ == "__main__":

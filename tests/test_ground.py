@@ -9,7 +9,14 @@ from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
 from flic_cli.ground import bogoslavskyi_ground, paper_ground
-from flic_cli.ground.bogoslavskyi import _repair_depth, savgol_kernel
+from flic_cli.ground.bogoslavskyi import (
+    _repair_and_legs,
+    _repair_depth,
+    _row_trig,
+    _smooth_columns,
+    _smooth_grow_shift,
+    savgol_kernel,
+)
 from flic_cli.ground.paper import paper_tables
 from flic_cli.io import open_dataset
 from flic_cli.projection import project_points
@@ -131,6 +138,72 @@ def test_bogoslavskyi_labels_move_down_one_row():
     ground = bogoslavskyi_ground(image)
     assert not ground[0].any()
     assert ground[1:].all()
+
+
+def _growth_reference(ranges, depth, smooth, threshold, start):
+    """Their growth as the module docstring states it (steps 4 and 5), plain Python, a queue."""
+    from collections import deque
+
+    h, w = depth.shape
+    label = np.zeros((h, w), dtype=bool)
+    for c in range(w):
+        r = h - 1
+        while r > 0 and depth[r, c] < 0.001:
+            r -= 1
+        if label[r, c] or smooth[r, c] > start:
+            continue
+        label[r, c] = True
+        queue = deque([(r, c)])
+        while queue:
+            pr, pc = queue.popleft()
+            if depth[pr, pc] < 0.001:
+                continue
+            for nr, nc in ((pr - 1, pc), (pr + 1, pc), (pr, (pc - 1) % w), (pr, (pc + 1) % w)):
+                if 0 <= nr < h and not label[nr, nc]:
+                    if abs(smooth[pr, pc] - smooth[nr, nc]) < threshold:
+                        label[nr, nc] = True
+                        queue.append((nr, nc))
+    ground = np.zeros((h, w), dtype=bool)
+    ground[1:] = label[:-1] & (ranges[1:] > 0)
+    return ground
+
+
+@settings(max_examples=40, deadline=None)
+@given(
+    seed=st.integers(0, 2**32 - 1),
+    shape=st.tuples(st.integers(2, 16), st.integers(1, 24)),
+    empty=st.floats(0.0, 0.6),
+    angle_deg=st.floats(1.0, 30.0),
+)
+def test_bogoslavskyi_growth_equals_the_rule_with_a_queue(seed, shape, empty, angle_deg):
+    # Random scenes: a road with steps and walls, random holes. The depth-first stack of the
+    # kernel and a breadth-first queue must label the same pixels (the labelled set does not
+    # depend on the order), given the same smoothed angles.
+    rng = np.random.default_rng(seed)
+    h, w = shape
+    elevation = np.radians(np.linspace(2.0, -24.0, h))
+    road = 1.73 / np.maximum(np.sin(-elevation), 0.05)
+    ranges = (road[:, None] * rng.uniform(0.3, 1.2, (h, w))).astype(np.float32)
+    ranges[rng.random((h, w)) < empty] = 0
+    sin_p, cos_p = _row_trig(elevation.tobytes())
+    depth, dy, dx = _repair_and_legs(ranges, sin_p, cos_p)
+    angle = np.arctan2(dy, dx)
+    kernel = savgol_kernel(5)
+    threshold, start = float(np.float32(np.radians(angle_deg))), float(np.radians(30.0))
+    got = _smooth_grow_shift(ranges, depth, angle, kernel, threshold, start)
+    smooth = _smooth_columns(angle, kernel)
+    assert np.array_equal(got, _growth_reference(ranges, depth, smooth, threshold, start))
+
+
+@pytest.mark.parametrize("window", [5, 7, 9, 11])
+def test_bogoslavskyi_smoothing_is_a_mirrored_column_filter(window):
+    # their filter2D with BORDER_REFLECT101 is scipy's correlate1d with mode "mirror"
+    from scipy.ndimage import correlate1d
+
+    angle = np.random.default_rng(window).uniform(0, 1.5, (13, 7)).astype(np.float32)
+    kernel = savgol_kernel(window)
+    expected = correlate1d(angle.astype(np.float64), kernel.astype(np.float64), 0, mode="mirror")
+    assert np.allclose(_smooth_columns(angle, kernel), expected, atol=1e-5)
 
 
 def _paper_reference(ranges, elevation, max_slope_deg=10.0, sensor_height=1.73):
