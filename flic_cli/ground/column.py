@@ -100,90 +100,6 @@ _UNDER_MIN_M = 0.3  # a cell above nearer by more than this is an occluder (foot
  _P_BASE_BAND, _P_NB_PX, _P_NB_BAND, _P_TAN_FOOT, _P_UNDER, _P_LEN) = range(13)  # fmt: skip
 
 
-@njit(cache=True, inline="always")
-def _surface_above(
-    rho_img: np.ndarray,
-    z_img: np.ndarray,
-    r: int,
-    c: int,
-    rho: float,
-    z: float,
-    grad: float,
-    noise: float,
-    tan_flat: float,
-) -> int:
-    """Do the cells above (r, c) continue a surface through it? 1 yes, 0 no, 2 no information
-    (nothing above within reach, or the next cell above is an occluder)."""
-    n = 0
-    prev = rho
-    run_rho = rho
-    run_z = z
-    lo = r - 1 - _RUN_ROWS
-    if lo < -1:
-        lo = -1
-    uc = np.uintp(c)  # unsigned indices: no negative-index wraparound in the generated code
-    for ra in range(r - 1, lo, -1):
-        ua = np.uintp(ra)
-        ra_rho = rho_img[ua, uc]
-        if ra_rho <= 0.0:
-            continue
-        ra_z = z_img[ua, uc]
-        if ra_rho < prev - _BEHIND_M or ra_rho > prev + _RUN_JUMP * prev:
-            if n == 0:
-                if ra_rho < prev - _OCCLUDER_M - _OCCLUDER_REL * prev:
-                    return 2
-                return 0
-            break
-        ddr = ra_rho - rho
-        if ddr < 0.0:
-            ddr = 0.0
-        # every cell within a loose band, the end of the run within the flat band
-        if abs(ra_z - z - grad * ddr) > 2.0 * noise + tan_flat * ddr:
-            return 0
-        prev = ra_rho
-        run_rho = ra_rho
-        run_z = ra_z
-        n += 1
-        if n >= _RUN_CELLS:
-            break
-    if n == 0:
-        return 2
-    if n < _RUN_MIN_CELLS:
-        return 0
-    ddr = run_rho - rho
-    if ddr < 0.0:
-        ddr = 0.0
-    return 1 if abs(run_z - z - grad * ddr) <= noise + tan_flat * ddr else 0
-
-
-@njit(cache=True, inline="always")
-def _stood_on(
-    rho_img: np.ndarray,
-    z_img: np.ndarray,
-    r: int,
-    c: int,
-    rho: float,
-    z: float,
-    tan_foot: float,
-    under: float,
-) -> bool:
-    """Is (r, c), at (rho, z), the foot of something (the next valid cell above, within
-    ``_FOOT_ROWS`` rows, rises from it more steeply than ``tan_foot``) or under a near occluder
-    (the cell above is nearer by ``_UNDER_MIN_M`` to ``under`` metres)?"""
-    uc = np.uintp(c)
-    ra = r - 1
-    while ra >= 0 and ra >= r - _FOOT_ROWS:
-        ua = np.uintp(ra)
-        ra_rho = rho_img[ua, uc]
-        if ra_rho > 0.0:
-            d = ra_rho - rho
-            if d < -_UNDER_MIN_M:
-                return d > -under
-            return z_img[ua, uc] - z > tan_foot * abs(d)
-        ra -= 1
-    return False
-
-
 @njit(cache=True)
 def _seed_window(
     se: float, ce: float, sensor_height: float, seed_tol: float, tan_seed: float
@@ -223,8 +139,11 @@ def _column_ground(
 
     Steps 1-5 run row by row from the bottom; every row then gets step 6 from the runs of cells
     it refused (maximal sequences between two taken cells), each with the taken cell before and
-    after it. Helpers are inlined and indices into the images unsigned, which keeps the
-    generated code short (instruction counts in results/ground/README.md)."""
+    after it. The tests of steps 3, 4 and 6 on the cells above are written out in the loop
+    rather than called as helpers: numba passes the images to a helper, inlined or not, with
+    atomic reference-count updates, which took a third of the time on scans with real ground.
+    Indices into the images are unsigned, which keeps the generated code short (instruction
+    counts in results/ground/README.md)."""
     sensor_height = p[_P_SENSOR]
     noise = p[_P_NOISE]
     tan_change = p[_P_TAN_CHANGE]
@@ -275,6 +194,10 @@ def _column_ground(
             z = zrow[c]
             gr = g_rho[c]
             taken = False  # by steps 2-5 (a reference of step 6)
+            ask = 0  # 3 or 4: a step or a seed that the cells above must confirm
+            e = 0.0
+            band = 0.0
+            grad = 0.0
             if gr >= 0.0:
                 dr = rho - gr
                 if dr >= -_BEHIND_M:  # else 1. in front of the ground: an object
@@ -305,13 +228,9 @@ def _column_ground(
                         if lim > max_step:
                             lim = max_step
                         if -(step_k + 3.0 * tan_gap * dr) <= e <= lim:
-                            s = _surface_above(rho_img, z_img, r, c, rho, z, gm, noise, tan_flat)
-                            if s == 1 or (s == 2 and abs(e) <= min(band, base_band)):
-                                taken = True
-                                g_z[c] = z
-                                g_rho[c] = rho
-                                last[c] = True
-                    if not taken:
+                            ask = 3
+                            grad = gm
+                    if not taken and ask == 0:
                         last[c] = False
                         # 5. base band: ground level just beyond the last ground point
                         taken = dr < _BASE_DR_M and -base_band <= e <= base_band
@@ -321,12 +240,62 @@ def _column_ground(
                 e = z + sensor_height
                 lim = seed_tol + tan_seed * rho
                 if -lim <= e <= lim:
-                    s = _surface_above(rho_img, z_img, r, c, rho, z, 0.0, noise, tan_flat)
-                    if s == 1 or (s == 2 and abs(e) <= base_band):
-                        taken = True
-                        g_z[c] = z
-                        g_rho[c] = rho
-                        last[c] = True
+                    ask = 4
+            if ask:
+                # Do the cells above continue a surface through this one? s = 1 yes, 0 no,
+                # 2 no information (nothing above within reach, or the next cell above is an
+                # occluder). Written out here, not as a helper: a call with the images as
+                # arguments costs four atomic reference-count updates, which took a third of
+                # the remover's time.
+                uc = np.uintp(c)
+                s = -1
+                n = 0
+                prev = rho
+                run_rho = rho
+                run_z = z
+                lo = r - 1 - _RUN_ROWS
+                if lo < -1:
+                    lo = -1
+                for ra in range(r - 1, lo, -1):
+                    ua = np.uintp(ra)
+                    ra_rho = rho_img[ua, uc]
+                    if ra_rho <= 0.0:
+                        continue
+                    ra_z = z_img[ua, uc]
+                    if ra_rho < prev - _BEHIND_M or ra_rho > prev + _RUN_JUMP * prev:
+                        if n == 0:
+                            s = 2 if ra_rho < prev - _OCCLUDER_M - _OCCLUDER_REL * prev else 0
+                        break
+                    ddr = max(ra_rho - rho, 0.0)
+                    # every cell within a loose band, the end of the run within the flat band
+                    if abs(ra_z - z - grad * ddr) > 2.0 * noise + tan_flat * ddr:
+                        s = 0
+                        break
+                    prev = ra_rho
+                    run_rho = ra_rho
+                    run_z = ra_z
+                    n += 1
+                    if n >= _RUN_CELLS:
+                        break
+                if s < 0:
+                    if n == 0:
+                        s = 2
+                    elif n < _RUN_MIN_CELLS:
+                        s = 0
+                    else:
+                        ddr = max(run_rho - rho, 0.0)
+                        s = 1 if abs(run_z - z - grad * ddr) <= noise + tan_flat * ddr else 0
+                # no information: a step within both bands, a seed within the base band
+                near = abs(e) <= (min(band, base_band) if ask == 3 else base_band)
+                if s == 1 or (s == 2 and near):
+                    taken = True
+                    g_z[c] = z
+                    g_rho[c] = rho
+                    last[c] = True
+                elif ask == 3:
+                    last[c] = False
+                    # 5. base band
+                    taken = dr < _BASE_DR_M and -base_band <= e <= base_band
             if taken:
                 orow[c] = True
                 if in_run:
@@ -372,8 +341,25 @@ def _column_ground(
                     hit = in_a and abs(rho - a_rho) <= _ROW_DRHO_M and abs(z - a_z) <= nb_band
                     if not hit and in_b:
                         hit = abs(rho - b_rho) <= _ROW_DRHO_M and abs(z - b_z) <= nb_band
-                    if hit and not _stood_on(rho_img, z_img, r, q, rho, z, tan_foot, under):
-                        orow[uq] = True
+                    if hit:
+                        # unless the cell is stood on: the next valid cell above (within
+                        # _FOOT_ROWS rows) rises from it more steeply than tan_foot, or is
+                        # nearer by _UNDER_MIN_M to `under` (written out, as the test above)
+                        stood = False
+                        ra = r - 1
+                        while ra >= 0 and ra >= r - _FOOT_ROWS:
+                            ua = np.uintp(ra)
+                            ra_rho = rho_img[ua, uq]
+                            if ra_rho > 0.0:
+                                d = ra_rho - rho
+                                if d < -_UNDER_MIN_M:
+                                    stood = d > -under
+                                else:
+                                    stood = z_img[ua, uq] - z > tan_foot * abs(d)
+                                break
+                            ra -= 1
+                        if not stood:
+                            orow[uq] = True
                 q += 1
     return out
 
