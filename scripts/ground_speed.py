@@ -2,14 +2,18 @@
 instructions per frame under callgrind.
 
 Every frame is read and projected once; then each round calls every remover once per frame, in
-turn, so that all removers see the same machine load. Prints (and optionally writes) the median,
+turn (the order turns from frame to frame, since the first call on a frame finds it out of
+cache), so that all removers see the same machine load. Prints (and optionally writes) the median,
 p5 and p95 milliseconds per frame and each remover's median relative to the first one. Removers
 that need points get the frame's points. Timings on a shared machine are noisy: compare the
 relative figures of one run, not absolute figures across runs.
 
 A remover is a registered name, optionally with parameters (``column:neighbour_px=0``), or
 ``column-previous``: the implementation of the ``column`` remover before step 6 and the kernel
-rework (commit 4eec351), kept in ``tests/test_ground_column.py`` as the reference of the tests.
+rework (commit 4eec351), kept in ``tests/test_ground_column.py`` as the reference of the tests,
+or ``NAME@REV``: the remover ``NAME`` with its defaults as it was at git revision ``REV`` (its
+module ``flic_cli/ground/NAME.py`` of that revision, loaded beside the working tree's); the
+table then says on how many frames its masks differ from those of the working tree's ``NAME``.
 
 ``--instructions`` counts instead of timing (deterministic, whatever the machine's load): for
 every remover it runs this script under ``valgrind --tool=callgrind`` with instrumentation off,
@@ -24,6 +28,7 @@ Usage::
         --removers column-previous,column,column:neighbour_px=0 --rounds 20
     python scripts/ground_speed.py /tmp/s/moosmann \\
         --removers column-previous,column,column:neighbour_px=0 --instructions --rounds 2
+    python scripts/ground_speed.py /tmp/kitti-log --removers column@a57d9e3~1,column --rounds 5
 """
 
 from __future__ import annotations
@@ -62,10 +67,31 @@ def previous_column():
     return lambda image, points=None: mod._reference(image)
 
 
+def remover_at(name: str, rev: str):
+    """The remover ``name`` with its defaults (its module's ``NAME_ground``) at git revision
+    ``rev``."""
+    src = subprocess.run(
+        ["git", "-C", str(ROOT), "show", f"{rev}:flic_cli/ground/{name}.py"],
+        capture_output=True, text=True, check=True,
+    ).stdout  # fmt: skip
+    folder = Path(tempfile.mkdtemp(prefix="flic-remover-"))
+    module = f"{name}_at_{re.sub(r'[^0-9A-Za-z]', '_', rev)}"
+    path = folder / f"{module}.py"
+    path.write_text(src)
+    spec = importlib.util.spec_from_file_location(module, path)
+    mod = importlib.util.module_from_spec(spec)
+    sys.modules[module] = mod
+    spec.loader.exec_module(mod)
+    return lambda image, points=None: getattr(mod, f"{name}_ground")(image)
+
+
 def make_remover(cfg, spec: str):
-    """A remover from ``NAME`` or ``NAME:param=value,...`` (see the module docstring)."""
+    """A remover from ``NAME``, ``NAME:param=value,...`` or ``NAME@REV`` (see the module
+    docstring)."""
     if spec == "column-previous":
         return previous_column()
+    if "@" in spec:
+        return remover_at(*spec.split("@", 1))
     name, _, params = spec.partition(":")
     remover = cfg.remover(name)
     if params:
@@ -153,10 +179,26 @@ def main() -> None:
         removers = {n: make_remover(cfg, n) for n in names}
         for remover in removers.values():  # warm-up: JIT compilation or cache load
             remover(frames[0].image, frames[0].points)
+        differ = {}
+        for n in names:  # an old revision's masks against the working tree's
+            if "@" in n:
+                current = cfg.remover(n.split("@")[0])
+                differ[n] = sum(
+                    not np.array_equal(removers[n](p.image, p.points), current(p.image, p.points))
+                    for p in frames
+                )
         times: dict[str, list[float]] = {n: [] for n in names}
-        for _ in range(args.rounds):
-            for prep in frames:
-                for n, remover in removers.items():
+        import gc
+
+        gc.collect()
+        gc.disable()
+        order = list(removers.items())
+        for k in range(args.rounds):
+            for i, prep in enumerate(frames):
+                # the order turns from frame to frame: the first remover after a new frame
+                # finds it out of cache, the others in it
+                turn = (i + k) % len(order)
+                for n, remover in order[turn:] + order[:turn]:
                     t0 = time.perf_counter()
                     remover(prep.image, prep.points)
                     times[n].append(time.perf_counter() - t0)
@@ -171,6 +213,7 @@ def main() -> None:
                 "p5_ms": round(1000 * float(np.percentile(t, 5)), 4),
                 "p95_ms": round(1000 * float(np.percentile(t, 95)), 4),
                 f"median_vs_{names[0]}": round(float(np.median(t)) / base, 2),
+                "frames_whose_mask_differs": differ.get(n, ""),
             }
             for n, t in times.items()
         ]
