@@ -2,7 +2,7 @@
 # Rerun every result committed under results/ (results/README.md explains each one), from the
 # repository root with ../shared beside it and the dev install active:
 #     . .venv/bin/activate && bash scripts/make_results.sh [step ...]
-# Steps: bench evaluate ground sweeps coverage dbscan pictures (default: all, in this order;
+# Steps: bench repeats evaluate ground sweeps coverage dbscan pictures (default: all, in this order;
 # the benchmarks first, on a quiet machine, since evaluate takes its times from them), and cpp
 # (not in the default: their C++ against flic; needs DC=<a PRBonn/depth_clustering checkout>
 # and the system packages that scripts/depth_clustering/time_cpp.sh names).
@@ -17,7 +17,7 @@ LOG=${LOG:-/tmp/flic-bench-log}
 KLOG=${KLOG:-/tmp/flic-kitti-log}
 METHODS=bogoslavskyi,flic0,flic1,flic6,flic14,flic1n,flic6n,flic14n,bridge,dbscan
 PEERS=flic0-scipy,flic14-scipy
-STEPS=${*:-bench evaluate ground sweeps coverage dbscan pictures}
+STEPS=${*:-bench repeats evaluate ground sweeps coverage dbscan pictures}
 
 fresh() { rm -rf "$1"; }  # an output folder is rewritten whole (no stale files)
 
@@ -47,6 +47,23 @@ for step in $STEPS; do
       --out results/benchmark/semantickitti
     python scripts/log_stats.py "$LOG/moosmann" > results/benchmark/synthetic-moosmann/log_stats.txt
     python scripts/log_stats.py "$KLOG" > results/benchmark/kitti-as-moosmann/log_stats.txt
+    ;;
+  repeats)
+    # how much the benchmark figures move between runs of the same code: the log benchmarks
+    # again with --rounds 3 (summaries only)
+    test -d "$LOG/moosmann" || flic sample "$LOG" --frames 500
+    test -d "$KLOG" || python scripts/kitti_as_moosmann.py "$DATA" "$KLOG"
+    fresh results/benchmark/repeats
+    for spec in "own-remover-rounds3:$LOG/moosmann:own" "paper-remover-rounds3-a:$LOG/moosmann:paper" \
+      "paper-remover-rounds3-b:$LOG/moosmann:paper" "kitti-as-moosmann-own-remover-rounds3:$KLOG:own"; do
+      IFS=: read -r name log remover <<< "$spec"
+      tmp=$(mktemp -d)
+      flic benchmark "$log" --methods "$METHODS" --ground-remover "$remover" --rounds 3 \
+        --no-plots --out "$tmp"
+      mkdir -p "results/benchmark/repeats/$name"
+      cp "$tmp/summary.csv" "$tmp/environment.json" "results/benchmark/repeats/$name/"
+      rm -rf "$tmp"
+    done
     ;;
   evaluate)
     # Table 1 (both settings, the paper's ground extraction), panoptic quality with oracle

@@ -5,12 +5,17 @@
 # their Moosmann example's pipeline (show_objects_moosmann.cpp) without the viewer.
 #
 #   bash scripts/depth_clustering/time_cpp.sh DC_CHECKOUT LOG REPEAT > cpp.csv
+#   bash scripts/depth_clustering/time_cpp.sh DC_CHECKOUT LOG dump OUT
+#
+# The second form writes their ground mask of every frame as OUT/NNNNN.ground (driver mode dump),
+# for scripts/bogoslavskyi_fidelity.py.
 #
 # Needs g++, OpenCV 4 (pkg-config opencv4), Boost (filesystem, regex) and Eigen 3 headers, e.g.
 # apt-get install g++ libopencv-dev libboost-filesystem-dev libboost-regex-dev libeigen3-dev.
 # Prints frame,ground_and_clustering_us,clustering_us (median of REPEAT calls per frame).
 set -euo pipefail
 dc=$(realpath "$1") log=$(realpath "$2") repeat=${3:-3}
+if [ "$repeat" = dump ]; then mkdir -p "$4"; out=$(realpath "$4"); fi
 here=$(dirname "$(realpath "$0")")
 build=$(mktemp -d)
 trap 'rm -rf "$build"' EXIT
@@ -44,4 +49,8 @@ g++ -O3 -DNDEBUG -std=c++17 -I"$build/inc" -I"$src" -I/usr/include/eigen3 \
 mkdir "$build/log"
 ln -s "$log"/*.png "$build/log/"
 grep -v '^#' "$log/img.cfg" | sed 's/;[[:space:]]*$//' > "$build/log/img.cfg"
-"$build/driver" time "$build/log" "$repeat"
+if [ "$repeat" = dump ]; then
+  "$build/driver" dump "$build/log" "$out"
+else
+  "$build/driver" time "$build/log" "$repeat"
+fi
