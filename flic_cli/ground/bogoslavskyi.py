@@ -215,9 +215,13 @@ def _smooth_grow_shift(ranges, depth, angle, kernel, threshold, start):
 
 @functools.lru_cache(maxsize=8)
 def _row_trig(elevation: bytes) -> tuple[np.ndarray, np.ndarray]:
-    """Sine and cosine of their row angles (pitch, positive down) in float32, per sensor."""
+    """Sine and cosine of their row angles (pitch, positive down), computed in float32 as their
+    code does, once per sensor (the elevation table as its float64 bytes); read-only."""
     pitch = (-np.frombuffer(elevation, dtype=np.float64)).astype(np.float32)
-    return np.sin(pitch), np.cos(pitch)
+    out = (np.sin(pitch), np.cos(pitch))
+    for a in out:
+        a.setflags(write=False)
+    return out
 
 
 @dataclass(frozen=True, config=STRICT)
