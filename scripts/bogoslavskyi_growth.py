@@ -65,7 +65,7 @@ def run(log: Path, frames: list[int], calls: int, sequence: str | None) -> None:
     for frame in frames:
         image = prepare(ds.load(refs[frame]), "ground", cfg.projection).image
         ranges = np.ascontiguousarray(image.ranges, dtype=np.float32)
-        sin_p, cos_p = _row_trig(np.asarray(image.elevation, dtype=np.float64).tobytes())
+        sin_p, cos_p = _row_trig(image.elevation)
         depth, dy, dx = _repair_and_legs(ranges, sin_p, cos_p)
         angle = np.arctan2(dy, dx)
         ground = _smooth_grow_shift(ranges, depth, angle, kernel, threshold, start)  # compiles

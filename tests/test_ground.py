@@ -185,7 +185,7 @@ def test_bogoslavskyi_growth_equals_the_rule_with_a_queue(seed, shape, empty, an
     road = 1.73 / np.maximum(np.sin(-elevation), 0.05)
     ranges = (road[:, None] * rng.uniform(0.3, 1.2, (h, w))).astype(np.float32)
     ranges[rng.random((h, w)) < empty] = 0
-    sin_p, cos_p = _row_trig(elevation.tobytes())
+    sin_p, cos_p = _row_trig(elevation)
     depth, dy, dx = _repair_and_legs(ranges, sin_p, cos_p)
     angle = np.arctan2(dy, dx)
     kernel = savgol_kernel(5)

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import functools
+from collections.abc import Callable
 from typing import Protocol
 
 import numpy as np
@@ -20,6 +22,30 @@ class GroundRemover(Protocol):
     """
 
     def __call__(self, image: RangeImage, points: np.ndarray) -> np.ndarray: ...
+
+
+def per_sensor(
+    tables: Callable[..., tuple[np.ndarray, ...]],
+) -> Callable[..., tuple[np.ndarray, ...]]:
+    """Cache a remover's per-row tables once per sensor instead of computing them per frame.
+
+    ``tables(elevation, *args)`` computes arrays from a (H,) float64 elevation table (radians);
+    the returned function takes the same arguments (any array-like elevation) and returns the
+    cached, read-only arrays, keyed by the table's bytes and ``args``.
+    """
+
+    @functools.lru_cache(maxsize=32)
+    def cached(elevation: bytes, *args: object) -> tuple[np.ndarray, ...]:
+        out = tables(np.frombuffer(elevation, dtype=np.float64), *args)
+        for a in out:
+            a.setflags(write=False)
+        return out
+
+    @functools.wraps(tables)
+    def call(elevation: np.ndarray, *args: object) -> tuple[np.ndarray, ...]:
+        return cached(np.ascontiguousarray(elevation, dtype=np.float64).tobytes(), *args)
+
+    return call
 
 
 @njit(cache=True)

@@ -46,6 +46,7 @@ from pydantic.dataclasses import dataclass
 from scipy.signal import savgol_coeffs
 
 from flic_cli.config.component import STRICT
+from flic_cli.ground.base import per_sensor
 from flic_cli.range_image import RangeImage
 
 #: Their seeds: a column's lowest pixel starts the growth only below this angle (hard-coded).
@@ -213,15 +214,11 @@ def _smooth_grow_shift(ranges, depth, angle, kernel, threshold, start):
     return _grow_and_shift(ranges, depth, _smooth_columns(angle, kernel), threshold, start)
 
 
-@functools.lru_cache(maxsize=8)
-def _row_trig(elevation: bytes) -> tuple[np.ndarray, np.ndarray]:
-    """Sine and cosine of their row angles (pitch, positive down), computed in float32 as their
-    code does, once per sensor (the elevation table as its float64 bytes); read-only."""
-    pitch = (-np.frombuffer(elevation, dtype=np.float64)).astype(np.float32)
-    out = (np.sin(pitch), np.cos(pitch))
-    for a in out:
-        a.setflags(write=False)
-    return out
+@per_sensor
+def _row_trig(el: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Sine and cosine of their row angles (pitch, positive down), in float32 as their code."""
+    pitch = (-el).astype(np.float32)
+    return np.sin(pitch), np.cos(pitch)
 
 
 @dataclass(frozen=True, config=STRICT)
@@ -271,7 +268,7 @@ def bogoslavskyi_ground(
         raise ValueError(f"Savitzky-Golay window must be 5, 7, 9 or 11, got {window}")
     ranges = np.ascontiguousarray(image.ranges, dtype=np.float32)
     # |dz| of their angle is the same for either sign of the row angle
-    sin_p, cos_p = _row_trig(np.asarray(image.elevation, dtype=np.float64).tobytes())
+    sin_p, cos_p = _row_trig(image.elevation)
     depth, dy, dx = _repair_and_legs(ranges, sin_p, cos_p)
     return _smooth_grow_shift(
         ranges,

@@ -73,6 +73,7 @@ from pydantic import Field
 from pydantic.dataclasses import dataclass
 
 from flic_cli.config.component import STRICT
+from flic_cli.ground.base import per_sensor
 from flic_cli.range_image import RangeImage
 
 # Fixed constants of the algorithm (see the module docstring), with the values the sweep chose.
@@ -364,15 +365,10 @@ def _column_ground(
     return out
 
 
-@functools.lru_cache(maxsize=32)
-def _row_trig(elevation: bytes) -> tuple[np.ndarray, np.ndarray]:
-    """Sine and cosine of every row as float32 (the precision of the ranges they multiply), for
-    one elevation table (given as its float64 bytes): computed once per sensor, not per frame."""
-    el = np.frombuffer(elevation, dtype=np.float64)
-    out = (np.sin(el).astype(np.float32), np.cos(el).astype(np.float32))
-    for a in out:
-        a.setflags(write=False)
-    return out
+@per_sensor
+def _row_trig(el: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Sine and cosine of every row as float32 (the precision of the ranges they multiply)."""
+    return np.sin(el).astype(np.float32), np.cos(el).astype(np.float32)
 
 
 @functools.lru_cache(maxsize=64)
@@ -502,8 +498,7 @@ def column_ground(
     -------
     (H, W) bool, True = ground. Empty pixels are never ground.
     """
-    el = np.ascontiguousarray(image.elevation, dtype=np.float64)
-    sin_el, cos_el = _row_trig(el.tobytes())
+    sin_el, cos_el = _row_trig(image.elevation)
     ranges = image.ranges
     if ranges.dtype != np.float32 or not ranges.flags.c_contiguous:
         ranges = np.ascontiguousarray(ranges, dtype=np.float32)

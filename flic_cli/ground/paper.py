@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import functools
 from typing import Annotated
 
 import numpy as np
@@ -11,6 +10,7 @@ from pydantic import Field
 from pydantic.dataclasses import dataclass
 
 from flic_cli.config.component import STRICT
+from flic_cli.ground.base import per_sensor
 from flic_cli.range_image import RangeImage
 
 
@@ -79,15 +79,10 @@ def paper_tables(
     return np.sin(gap), np.cos(gap), np.tan(lo), np.tan(hi)
 
 
-@functools.lru_cache(maxsize=32)
-def _row_constants(elevation: bytes, max_slope_deg: float) -> tuple[np.ndarray, ...]:
-    """:func:`paper_tables` and the sine and cosine of every row, for one elevation table (given
-    as its float64 bytes): computed once per sensor instead of once per frame."""
-    el = np.frombuffer(elevation, dtype=np.float64)
-    out = (*paper_tables(el, max_slope_deg), np.sin(el), np.cos(el))
-    for a in out:
-        a.setflags(write=False)
-    return out
+@per_sensor
+def _row_constants(el: np.ndarray, max_slope_deg: float) -> tuple[np.ndarray, ...]:
+    """:func:`paper_tables` and the sine and cosine of every row."""
+    return (*paper_tables(el, max_slope_deg), np.sin(el), np.cos(el))
 
 
 @dataclass(frozen=True, config=STRICT)
@@ -141,8 +136,7 @@ def paper_ground(
     -------
     (H, W) bool, True = ground. Empty pixels are never ground.
     """
-    el = np.ascontiguousarray(image.elevation, dtype=np.float64)
-    consts = _row_constants(el.tobytes(), float(max_slope_deg))
+    consts = _row_constants(image.elevation, float(max_slope_deg))
     sin_a, cos_a, tan_lo, tan_hi, sin_el, cos_el = consts
     return _paper_ground(
         image.ranges,
