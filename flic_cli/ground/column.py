@@ -132,236 +132,288 @@ def _seed_window(
 
 
 @njit(cache=True)
+def _geometry_row(
+    ranges: np.ndarray,
+    se: float,
+    ce: float,
+    rho: np.ndarray,
+    z: np.ndarray,
+    up_rho: np.ndarray,
+    up_z: np.ndarray,
+    cur_rho: np.ndarray,
+    cur_z: np.ndarray,
+) -> None:
+    """One row, top to bottom: horizontal range ``rho`` and height ``z`` of its pixels (0, 0
+    where empty), and ``up_rho``, ``up_z``: those of the next valid cell above in the column
+    (0, 0: none), from ``cur_rho``, ``cur_z`` (the last valid cell of the rows above, updated).
+    Branch-free, so that it runs as vector code."""
+    for c in range(ranges.shape[0]):
+        rv = ranges[c] * ce
+        zv = ranges[c] * se
+        rho[c] = rv
+        z[c] = zv
+        cr = cur_rho[c]
+        cz = cur_z[c]
+        up_rho[c] = cr
+        up_z[c] = cz
+        valid = rv > 0.0
+        cur_rho[c] = rv if valid else cr
+        cur_z[c] = zv if valid else cz
+
+
+@njit(cache=True)
+def _columns_row(
+    rho_row: np.ndarray,
+    z_row: np.ndarray,
+    up_rho: np.ndarray,
+    up_z: np.ndarray,
+    g_rho: np.ndarray,
+    g_z: np.ndarray,
+    g_m: np.ndarray,
+    last: np.ndarray,
+    taken: np.ndarray,
+    ask: np.ndarray,
+    seed_lo: float,
+    seed_hi: float,
+    p: np.ndarray,
+) -> None:
+    """Steps 1, 2 and 5 for every cell of one row, and which cells need the cells above for
+    step 3 or 4 (``ask``); updates the column models of the cells steps 2 takes.
+
+    Every test is computed for every column and the results are selected without branches, so
+    that the loop runs as vector code: which cells are ground is data that no branch predictor
+    guesses. Step 2's test for the bottom row of a distant object reads the next valid cell
+    above (``up_rho``, ``up_z``). The arithmetic is that of the scalar rule in the module
+    docstring, in the same precision, so the masks are exactly the same."""
+    noise = p[_P_NOISE]
+    tan_change = p[_P_TAN_CHANGE]
+    step_k = noise + p[_P_KERB]
+    max_step = p[_P_MAX_STEP]
+    base_band = p[_P_BASE_BAND]
+    tan_gap = np.tan(np.radians(_GAP_SLOPE_DEG))
+    tan_seed = np.tan(np.radians(_SEED_SLOPE_DEG))
+    max_grad = np.tan(np.radians(_MAX_GRADIENT_DEG))
+    sensor_height = p[_P_SENSOR]
+    seed_tol = p[_P_SEED_TOL]
+    for c in range(rho_row.shape[0]):
+        rho = np.float64(rho_row[c])
+        z = np.float64(z_row[c])
+        gr = g_rho[c]
+        gz = g_z[c]
+        gm = g_m[c]
+        valid = rho > 0.0
+        has = gr >= 0.0  # the column has ground
+        dr = rho - gr
+        in_front = dr < -_BEHIND_M  # 1.
+        dr = dr if dr >= 0.0 else 0.0
+        e = z - (gz + gm * dr)
+        band = noise + tan_change * dr
+        live = valid & has & ~in_front
+        cont = live & last[c] & (e >= -band) & (e <= band)  # 2.
+        u = up_rho[c]
+        stood_on = (dr > _FAR_DR_M) & (u > 0.0) & (abs(u - rho_row[c]) < 0.25 * dr)
+        stood_on &= up_z[c] > z_row[c]
+        follow = cont & ~stood_on
+        lim = step_k + tan_gap * dr
+        lim = lim if lim <= max_step else max_step
+        step = live & ~cont & (e >= -(step_k + 3.0 * tan_gap * dr)) & (e <= lim)  # 3.
+        es = z + sensor_height
+        slim = seed_tol + tan_seed * rho
+        seed = valid & ~has & (rho >= seed_lo) & (rho <= seed_hi) & (es >= -slim) & (es <= slim)
+        base = live & (~cont | stood_on) & ~step & (dr < _BASE_DR_M)  # 5.
+        base &= (e >= -base_band) & (e <= base_band)
+        m = gm + _GAIN_GRADIENT * e / max(dr, _GAIN_BASE_M)
+        m = min(max(m, -max_grad), max_grad)
+        g_z[c] = (gz + gm * dr + _GAIN_HEIGHT * e) if follow else gz
+        g_m[c] = m if follow else gm
+        g_rho[c] = rho if follow else gr
+        last[c] = last[c] & ~(valid & has & ~follow & ~step)
+        taken[c] = follow | base
+        ask[c] = step | seed
+
+
+@njit(cache=True)
 def _column_ground(
     ranges: np.ndarray, sin_el: np.ndarray, cos_el: np.ndarray, p: np.ndarray
 ) -> np.ndarray:
     """The remover on one image; ``sin_el``, ``cos_el`` are float32 per row, ``p`` holds the
     parameters in the ``_P_*`` layout.
 
-    Steps 1-5 run row by row from the bottom; every row then gets step 6 from the runs of cells
-    it refused (maximal sequences between two taken cells), each with the taken cell before and
-    after it. The tests of steps 3, 4 and 6 on the cells above are written out in the loop
-    rather than called as helpers: numba passes the images to a helper, inlined or not, with
-    atomic reference-count updates, which took a third of the time on scans with real ground.
-    Indices into the images are unsigned, which keeps the generated code short (instruction
-    counts in results/ground/README.md)."""
+    Every row, from the bottom, in three passes: steps 1, 2 and 5 for every column in vector
+    code (:func:`_columns_row`); then the cells that step 3 or 4 asks about, one by one, where
+    the cells above decide; then step 6 on the gaps between consecutive cells taken so far. The
+    columns are independent within a row, so the order of the passes does not change the mask
+    (tests/test_ground_column.py pins it against the rule written cell by cell). The tests on
+    the cells above are written out here rather than called as helpers: numba passes the images
+    to a helper with atomic reference-count updates, which took a third of the time on scans
+    with real ground. Indices into the images are unsigned, which keeps the generated code
+    short."""
     sensor_height = p[_P_SENSOR]
     noise = p[_P_NOISE]
     tan_change = p[_P_TAN_CHANGE]
-    kerb = p[_P_KERB]
-    max_step = p[_P_MAX_STEP]
+    base_band = p[_P_BASE_BAND]
     tan_flat = p[_P_TAN_FLAT]
     seed_tol = p[_P_SEED_TOL]
-    base_band = p[_P_BASE_BAND]
     nb_px = int(p[_P_NB_PX])
     nb_band = p[_P_NB_BAND]
     tan_foot = p[_P_TAN_FOOT]
     under = p[_P_UNDER]
+    tan_seed = np.tan(np.radians(_SEED_SLOPE_DEG))
     h, w = ranges.shape
-    # horizontal range and height of every pixel (0, 0 where empty: cos(elevation) > 0)
+    # horizontal range and height of every pixel and of the next valid cell above it
     rho_img = np.empty((h, w), dtype=np.float32)
     z_img = np.empty((h, w), dtype=np.float32)
+    up_rho = np.empty((h, w), dtype=np.float32)
+    up_z = np.empty((h, w), dtype=np.float32)
+    cur_rho = np.zeros(w, dtype=np.float32)
+    cur_z = np.zeros(w, dtype=np.float32)
     for r in range(h):
-        se = sin_el[r]
-        ce = cos_el[r]
-        for c in range(w):
-            rho_img[r, c] = ranges[r, c] * ce
-            z_img[r, c] = ranges[r, c] * se
-    tan_gap = np.tan(np.radians(_GAP_SLOPE_DEG))
-    tan_seed = np.tan(np.radians(_SEED_SLOPE_DEG))
-    max_grad = np.tan(np.radians(_MAX_GRADIENT_DEG))
-    step_k = noise + kerb
+        _geometry_row(ranges[r], sin_el[r], cos_el[r], rho_img[r], z_img[r], up_rho[r],
+                      up_z[r], cur_rho, cur_z)  # fmt: skip
     out = np.zeros((h, w), dtype=np.bool_)
     g_rho = np.full(w, -1.0)  # last ground point of the column (-1: none yet)
     g_z = np.zeros(w)
     g_m = np.zeros(w)  # ground gradient
     last = np.zeros(w, dtype=np.bool_)  # the column's previous valid cell was ground
-    # runs of refused cells of the row: taken cell before (-1: none), first cell, taken cell after
-    run_a = np.empty(w + 1, dtype=np.int64)
-    run_s = np.empty(w + 1, dtype=np.int64)
-    run_b = np.empty(w + 1, dtype=np.int64)
+    ask = np.zeros(w, dtype=np.bool_)
+    cols = np.empty(w + 1, dtype=np.int64)  # columns of the asking or the taken cells
     for r in range(h - 1, -1, -1):
         seed_lo, seed_hi = _seed_window(sin_el[r], cos_el[r], sensor_height, seed_tol, tan_seed)
         rrow = rho_img[r]
         zrow = z_img[r]
         orow = out[r]
-        n_run = 0
-        in_run = False
-        last_taken = -1
+        _columns_row(rrow, zrow, up_rho[r], up_z[r], g_rho, g_z, g_m, last, orow, ask,
+                     seed_lo, seed_hi, p)  # fmt: skip
+        n_ask = 0
         for c in range(w):
-            rho = rrow[c]
-            if rho <= 0.0:
-                continue
-            z = zrow[c]
-            gr = g_rho[c]
-            taken = False  # by steps 2-5 (a reference of step 6)
-            ask = 0  # 3 or 4: a step or a seed that the cells above must confirm
-            e = 0.0
+            cols[np.uintp(n_ask)] = c
+            n_ask += ask[c]
+        for k in range(n_ask):
+            # Steps 3 (a step) and 4 (a seed): do the cells above continue a surface through
+            # this one? s = 1 yes, 0 no, 2 no information (nothing above within reach, or the
+            # next cell above is an occluder).
+            uc = np.uintp(cols[np.uintp(k)])
+            rho = rrow[uc]
+            z = zrow[uc]
+            gr = g_rho[uc]
+            is_step = gr >= 0.0
+            dr = 0.0
             band = 0.0
             grad = 0.0
-            if gr >= 0.0:
+            if is_step:
                 dr = rho - gr
-                if dr >= -_BEHIND_M:  # else 1. in front of the ground: an object
-                    if dr < 0.0:
-                        dr = 0.0
-                    gm = g_m[c]
-                    gz = g_z[c]
-                    e = z - (gz + gm * dr)
-                    band = noise + tan_change * dr
-                    if last[c] and -band <= e <= band:  # 2. continuation
-                        taken = True
-                        if dr > _FAR_DR_M:  # the bottom row of a distant object?
-                            uc = np.uintp(c)
-                            for ra in range(r - 1, -1, -1):
-                                ua = np.uintp(ra)
-                                ra_rho = rho_img[ua, uc]
-                                if ra_rho > 0.0:
-                                    if abs(ra_rho - rho) < 0.25 * dr and z_img[ua, uc] > z:
-                                        taken = False
-                                    break
-                        if taken:
-                            m = gm + _GAIN_GRADIENT * e / max(dr, _GAIN_BASE_M)
-                            g_z[c] = gz + gm * dr + _GAIN_HEIGHT * e
-                            g_m[c] = min(max(m, -max_grad), max_grad)
-                            g_rho[c] = rho
-                    else:  # 3. step
-                        lim = step_k + tan_gap * dr
-                        if lim > max_step:
-                            lim = max_step
-                        if -(step_k + 3.0 * tan_gap * dr) <= e <= lim:
-                            ask = 3
-                            grad = gm
-                    if not taken and ask == 0:
-                        last[c] = False
-                        # 5. base band: ground level just beyond the last ground point
-                        taken = dr < _BASE_DR_M and -base_band <= e <= base_band
-                else:
-                    last[c] = False
-            elif seed_lo <= rho <= seed_hi:  # 4. seed (last[c] is False without ground)
+                if dr < 0.0:
+                    dr = 0.0
+                grad = g_m[uc]
+                e = z - (g_z[uc] + grad * dr)
+                band = noise + tan_change * dr
+            else:
                 e = z + sensor_height
-                lim = seed_tol + tan_seed * rho
-                if -lim <= e <= lim:
-                    ask = 4
-            if ask:
-                # Do the cells above continue a surface through this one? s = 1 yes, 0 no,
-                # 2 no information (nothing above within reach, or the next cell above is an
-                # occluder). Written out here, not as a helper: a call with the images as
-                # arguments costs four atomic reference-count updates, which took a third of
-                # the remover's time.
-                uc = np.uintp(c)
-                s = -1
-                n = 0
-                prev = rho
-                run_rho = rho
-                run_z = z
-                lo = r - 1 - _RUN_ROWS
-                if lo < -1:
-                    lo = -1
-                for ra in range(r - 1, lo, -1):
-                    ua = np.uintp(ra)
-                    ra_rho = rho_img[ua, uc]
-                    if ra_rho <= 0.0:
-                        continue
-                    ra_z = z_img[ua, uc]
-                    if ra_rho < prev - _BEHIND_M or ra_rho > prev + _RUN_JUMP * prev:
-                        if n == 0:
-                            s = 2 if ra_rho < prev - _OCCLUDER_M - _OCCLUDER_REL * prev else 0
-                        break
-                    ddr = max(ra_rho - rho, 0.0)
-                    # every cell within a loose band, the end of the run within the flat band
-                    if abs(ra_z - z - grad * ddr) > 2.0 * noise + tan_flat * ddr:
-                        s = 0
-                        break
-                    prev = ra_rho
-                    run_rho = ra_rho
-                    run_z = ra_z
-                    n += 1
-                    if n >= _RUN_CELLS:
-                        break
-                if s < 0:
+            s = -1
+            n = 0
+            prev = rho
+            run_rho = rho
+            run_z = z
+            lo = r - 1 - _RUN_ROWS
+            if lo < -1:
+                lo = -1
+            for ra in range(r - 1, lo, -1):
+                ua = np.uintp(ra)
+                ra_rho = rho_img[ua, uc]
+                if ra_rho <= 0.0:
+                    continue
+                ra_z = z_img[ua, uc]
+                if ra_rho < prev - _BEHIND_M or ra_rho > prev + _RUN_JUMP * prev:
                     if n == 0:
-                        s = 2
-                    elif n < _RUN_MIN_CELLS:
-                        s = 0
-                    else:
-                        ddr = max(run_rho - rho, 0.0)
-                        s = 1 if abs(run_z - z - grad * ddr) <= noise + tan_flat * ddr else 0
-                # no information: a step within both bands, a seed within the base band
-                near = abs(e) <= (min(band, base_band) if ask == 3 else base_band)
-                if s == 1 or (s == 2 and near):
-                    taken = True
-                    g_z[c] = z
-                    g_rho[c] = rho
-                    last[c] = True
-                elif ask == 3:
-                    last[c] = False
-                    # 5. base band
-                    taken = dr < _BASE_DR_M and -base_band <= e <= base_band
-            if taken:
-                orow[c] = True
-                if in_run:
-                    run_b[np.uintp(n_run)] = c
-                    n_run += 1
-                    in_run = False
-                last_taken = c
-            elif not in_run:
-                run_a[np.uintp(n_run)] = last_taken
-                run_s[np.uintp(n_run)] = c
-                in_run = True
-        if in_run:
-            run_b[np.uintp(n_run)] = -1
-            n_run += 1
+                        s = 2 if ra_rho < prev - _OCCLUDER_M - _OCCLUDER_REL * prev else 0
+                    break
+                ddr = max(ra_rho - rho, 0.0)
+                # every cell within a loose band, the end of the run within the flat band
+                if abs(ra_z - z - grad * ddr) > 2.0 * noise + tan_flat * ddr:
+                    s = 0
+                    break
+                prev = ra_rho
+                run_rho = ra_rho
+                run_z = ra_z
+                n += 1
+                if n >= _RUN_CELLS:
+                    break
+            if s < 0:
+                if n == 0:
+                    s = 2
+                elif n < _RUN_MIN_CELLS:
+                    s = 0
+                else:
+                    ddr = max(run_rho - rho, 0.0)
+                    s = 1 if abs(run_z - z - grad * ddr) <= noise + tan_flat * ddr else 0
+            # no information: a step within both bands, a seed within the base band
+            near = abs(e) <= (min(band, base_band) if is_step else base_band)
+            if s == 1 or (s == 2 and near):
+                orow[uc] = True
+                g_z[uc] = z
+                g_rho[uc] = rho
+                last[uc] = True
+            elif is_step:
+                last[uc] = False
+                # 5. base band
+                orow[uc] = dr < _BASE_DR_M and -base_band <= e <= base_band
         if nb_px <= 0:
             continue
-        # 6. neighbours in the row: the cells of every run within reach of the taken cell before
-        # it (a) or after it (b), compared with the nearer-side reference(s) in reach
-        for k in range(n_run):
-            uk = np.uintp(k)
-            a = run_a[uk]
-            b = run_b[uk]
-            if a < 0 and b < 0:
+        # 6. neighbours in the row: the refused cells between two consecutive taken cells a
+        # and b (-1: none before or after), those within reach of a or of b
+        n_taken = 0
+        for c in range(w):
+            cols[np.uintp(n_taken)] = c
+            n_taken += orow[c]
+        if n_taken == 0:
+            continue
+        for k in range(-1, n_taken):
+            a = cols[np.uintp(k)] if k >= 0 else -1
+            b = cols[np.uintp(k + 1)] if k + 1 < n_taken else -1
+            lo_q = a + 1
+            hi_q = b if b >= 0 else w
+            if hi_q <= lo_q:
                 continue
+            end_a = min(a + nb_px + 1, hi_q) if a >= 0 else lo_q
+            start_b = max(b - nb_px, end_a) if b >= 0 else hi_q
             a_rho = rrow[np.uintp(a)] if a >= 0 else np.float32(0.0)
             a_z = zrow[np.uintp(a)] if a >= 0 else np.float32(0.0)
             b_rho = rrow[np.uintp(b)] if b >= 0 else np.float32(0.0)
             b_z = zrow[np.uintp(b)] if b >= 0 else np.float32(0.0)
-            q = run_s[uk]
-            end = b if b >= 0 else w
-            while q < end:
-                in_a = a >= 0 and q - a <= nb_px
-                in_b = b >= 0 and b - q <= nb_px
-                if not (in_a or in_b):
-                    if b < 0:
-                        break
-                    q = b - nb_px  # skip to the part of the run within reach of b
-                    continue
-                uq = np.uintp(q)
-                rho = rrow[uq]
-                if rho > 0.0:
+            for part in range(2):
+                q0 = lo_q if part == 0 else start_b
+                q1 = end_a if part == 0 else hi_q
+                for q in range(q0, q1):
+                    uq = np.uintp(q)
+                    rho = rrow[uq]
+                    if rho <= 0.0:
+                        continue
                     z = zrow[uq]
+                    in_a = a >= 0 and q - a <= nb_px
+                    in_b = b >= 0 and b - q <= nb_px
                     hit = in_a and abs(rho - a_rho) <= _ROW_DRHO_M and abs(z - a_z) <= nb_band
                     if not hit and in_b:
                         hit = abs(rho - b_rho) <= _ROW_DRHO_M and abs(z - b_z) <= nb_band
-                    if hit:
-                        # unless the cell is stood on: the next valid cell above (within
-                        # _FOOT_ROWS rows) rises from it more steeply than tan_foot, or is
-                        # nearer by _UNDER_MIN_M to `under` (written out, as the test above)
-                        stood = False
-                        ra = r - 1
-                        while ra >= 0 and ra >= r - _FOOT_ROWS:
-                            ua = np.uintp(ra)
-                            ra_rho = rho_img[ua, uq]
-                            if ra_rho > 0.0:
-                                d = ra_rho - rho
-                                if d < -_UNDER_MIN_M:
-                                    stood = d > -under
-                                else:
-                                    stood = z_img[ua, uq] - z > tan_foot * abs(d)
-                                break
-                            ra -= 1
-                        if not stood:
-                            orow[uq] = True
-                q += 1
+                    if not hit:
+                        continue
+                    # unless the cell is stood on: the next valid cell above (within
+                    # _FOOT_ROWS rows) rises from it more steeply than tan_foot, or is nearer by
+                    # _UNDER_MIN_M to `under`
+                    stood = False
+                    ra = r - 1
+                    while ra >= 0 and ra >= r - _FOOT_ROWS:
+                        ua = np.uintp(ra)
+                        ra_rho = rho_img[ua, uq]
+                        if ra_rho > 0.0:
+                            d = ra_rho - rho
+                            if d < -_UNDER_MIN_M:
+                                stood = d > -under
+                            else:
+                                stood = z_img[ua, uq] - z > tan_foot * abs(d)
+                            break
+                        ra -= 1
+                    if not stood:
+                        orow[uq] = True
     return out
 
 
