@@ -72,6 +72,7 @@ from numba import njit
 from pydantic import Field
 from pydantic.dataclasses import dataclass
 
+from flic_cli.bitwords import pack, trailing_zeros
 from flic_cli.config.component import STRICT
 from flic_cli.ground.base import per_sensor
 from flic_cli.range_image import RangeImage
@@ -275,103 +276,120 @@ def _column_ground(
     g_z = np.zeros(w)
     g_m = np.zeros(w)  # ground gradient
     last = np.zeros(w, dtype=np.bool_)  # the column's previous valid cell was ground
-    ask = np.zeros(w, dtype=np.bool_)
-    cols = np.empty(w + 1, dtype=np.int64)  # columns of the asking or the taken cells
+    # the row's flags, padded to whole words: taken by steps 2-5, asking about the cells above
+    nw = (w + 63) // 64
+    taken = np.zeros(64 * nw, dtype=np.uint8)
+    ask = np.zeros(64 * nw, dtype=np.uint8)
+    taken_w = np.zeros(nw, dtype=np.uint64)
+    ask_w = np.zeros(nw, dtype=np.uint64)
+    flips = np.empty(w + 2, dtype=np.int64)  # columns where the row flips taken / not taken
     for r in range(h - 1, -1, -1):
         seed_lo, seed_hi = _seed_window(sin_el[r], cos_el[r], sensor_height, seed_tol, tan_seed)
         rrow = rho_img[r]
         zrow = z_img[r]
         orow = out[r]
-        _columns_row(rrow, zrow, up_rho[r], up_z[r], g_rho, g_z, g_m, last, orow, ask,
+        _columns_row(rrow, zrow, up_rho[r], up_z[r], g_rho, g_z, g_m, last, taken, ask,
                      seed_lo, seed_hi, p)  # fmt: skip
-        n_ask = 0
-        for c in range(w):
-            cols[np.uintp(n_ask)] = c
-            n_ask += ask[c]
-        for k in range(n_ask):
-            # Steps 3 (a step) and 4 (a seed): do the cells above continue a surface through
-            # this one? s = 1 yes, 0 no, 2 no information (nothing above within reach, or the
-            # next cell above is an occluder).
-            uc = np.uintp(cols[np.uintp(k)])
-            rho = rrow[uc]
-            z = zrow[uc]
-            gr = g_rho[uc]
-            is_step = gr >= 0.0
-            dr = 0.0
-            band = 0.0
-            grad = 0.0
-            if is_step:
-                dr = rho - gr
-                if dr < 0.0:
-                    dr = 0.0
-                grad = g_m[uc]
-                e = z - (g_z[uc] + grad * dr)
-                band = noise + tan_change * dr
-            else:
-                e = z + sensor_height
-            s = -1
-            n = 0
-            prev = rho
-            run_rho = rho
-            run_z = z
-            lo = r - 1 - _RUN_ROWS
-            if lo < -1:
-                lo = -1
-            for ra in range(r - 1, lo, -1):
-                ua = np.uintp(ra)
-                ra_rho = rho_img[ua, uc]
-                if ra_rho <= 0.0:
-                    continue
-                ra_z = z_img[ua, uc]
-                if ra_rho < prev - _BEHIND_M or ra_rho > prev + _RUN_JUMP * prev:
-                    if n == 0:
-                        s = 2 if ra_rho < prev - _OCCLUDER_M - _OCCLUDER_REL * prev else 0
-                    break
-                ddr = max(ra_rho - rho, 0.0)
-                # every cell within a loose band, the end of the run within the flat band
-                if abs(ra_z - z - grad * ddr) > 2.0 * noise + tan_flat * ddr:
-                    s = 0
-                    break
-                prev = ra_rho
-                run_rho = ra_rho
-                run_z = ra_z
-                n += 1
-                if n >= _RUN_CELLS:
-                    break
-            if s < 0:
-                if n == 0:
-                    s = 2
-                elif n < _RUN_MIN_CELLS:
-                    s = 0
+        pack(ask, ask_w)
+        for k in range(nw):
+            bits = ask_w[k]
+            while bits:
+                # Steps 3 (a step) and 4 (a seed): do the cells above continue a surface through
+                # this one? s = 1 yes, 0 no, 2 no information (nothing above within reach, or the
+                # next cell above is an occluder).
+                uc = np.uintp(64 * k + trailing_zeros(bits))
+                bits &= bits - np.uint64(1)
+                rho = rrow[uc]
+                z = zrow[uc]
+                gr = g_rho[uc]
+                is_step = gr >= 0.0
+                dr = 0.0
+                band = 0.0
+                grad = 0.0
+                if is_step:
+                    dr = rho - gr
+                    if dr < 0.0:
+                        dr = 0.0
+                    grad = g_m[uc]
+                    e = z - (g_z[uc] + grad * dr)
+                    band = noise + tan_change * dr
                 else:
-                    ddr = max(run_rho - rho, 0.0)
-                    s = 1 if abs(run_z - z - grad * ddr) <= noise + tan_flat * ddr else 0
-            # no information: a step within both bands, a seed within the base band
-            near = abs(e) <= (min(band, base_band) if is_step else base_band)
-            if s == 1 or (s == 2 and near):
-                orow[uc] = True
-                g_z[uc] = z
-                g_rho[uc] = rho
-                last[uc] = True
-            elif is_step:
-                last[uc] = False
-                # 5. base band
-                orow[uc] = dr < _BASE_DR_M and -base_band <= e <= base_band
+                    e = z + sensor_height
+                s = -1
+                n = 0
+                prev = rho
+                run_rho = rho
+                run_z = z
+                lo = r - 1 - _RUN_ROWS
+                if lo < -1:
+                    lo = -1
+                for ra in range(r - 1, lo, -1):
+                    ua = np.uintp(ra)
+                    ra_rho = rho_img[ua, uc]
+                    if ra_rho <= 0.0:
+                        continue
+                    ra_z = z_img[ua, uc]
+                    if ra_rho < prev - _BEHIND_M or ra_rho > prev + _RUN_JUMP * prev:
+                        if n == 0:
+                            s = 2 if ra_rho < prev - _OCCLUDER_M - _OCCLUDER_REL * prev else 0
+                        break
+                    ddr = max(ra_rho - rho, 0.0)
+                    # every cell within a loose band, the end of the run within the flat band
+                    if abs(ra_z - z - grad * ddr) > 2.0 * noise + tan_flat * ddr:
+                        s = 0
+                        break
+                    prev = ra_rho
+                    run_rho = ra_rho
+                    run_z = ra_z
+                    n += 1
+                    if n >= _RUN_CELLS:
+                        break
+                if s < 0:
+                    if n == 0:
+                        s = 2
+                    elif n < _RUN_MIN_CELLS:
+                        s = 0
+                    else:
+                        ddr = max(run_rho - rho, 0.0)
+                        s = 1 if abs(run_z - z - grad * ddr) <= noise + tan_flat * ddr else 0
+                # no information: a step within both bands, a seed within the base band
+                near = abs(e) <= (min(band, base_band) if is_step else base_band)
+                if s == 1 or (s == 2 and near):
+                    taken[uc] = True
+                    g_z[uc] = z
+                    g_rho[uc] = rho
+                    last[uc] = True
+                elif is_step:
+                    last[uc] = False
+                    # 5. base band
+                    taken[uc] = dr < _BASE_DR_M and -base_band <= e <= base_band
+        for c in range(w):
+            orow[c] = taken[c]
         if nb_px <= 0:
             continue
         # 6. neighbours in the row: the refused cells between two consecutive taken cells a
-        # and b (-1: none before or after), those within reach of a or of b
-        n_taken = 0
-        for c in range(w):
-            cols[np.uintp(n_taken)] = c
-            n_taken += orow[c]
-        if n_taken == 0:
+        # and b (-1: none before or after), those within reach of a or of b. The gaps between
+        # taken cells start and end where the row flips between taken and not (empty cells are
+        # not taken: a gap may hold nothing valid).
+        pack(taken, taken_w)
+        n_flip = 0
+        carry = np.uint64(0)
+        for k in range(nw):
+            t = taken_w[k]
+            bits = t ^ ((t << np.uint64(1)) | carry)
+            carry = t >> np.uint64(63)
+            while bits:
+                flips[np.uintp(n_flip)] = 64 * k + trailing_zeros(bits)
+                n_flip += 1
+                bits &= bits - np.uint64(1)
+        if n_flip == 0:
             continue
-        for k in range(-1, n_taken):
-            a = cols[np.uintp(k)] if k >= 0 else -1
-            b = cols[np.uintp(k + 1)] if k + 1 < n_taken else -1
-            lo_q = a + 1
-            hi_q = b if b >= 0 else w
+        flips[np.uintp(n_flip)] = w  # a row that ends taken: its last gap is empty
+        for j in range(-1, n_flip + 1, 2):  # the gap from flip j (-1: the row's start)
+            lo_q = flips[np.uintp(j)] if j >= 0 else 0
+            a = lo_q - 1
+            hi_q = flips[np.uintp(j + 1)] if j + 1 < n_flip else w
+            b = hi_q if j + 1 < n_flip else -1
             if hi_q <= lo_q:
                 continue
             end_a = min(a + nb_px + 1, hi_q) if a >= 0 else lo_q

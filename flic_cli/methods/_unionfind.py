@@ -39,7 +39,8 @@ from __future__ import annotations
 
 import numpy as np
 from numba import njit
-from numba.cpython.unsafe.numbers import trailing_zeros  # an LLVM cttz intrinsic
+
+from flic_cli.bitwords import pack, trailing_zeros
 
 DISTANCE = 0  # connected when d1^2 + d2^2 - 2 cos(a) d1 d2 < param   (param = t^2)
 ANGLE = 1  # connected when atan2(d_min sin a, d_max - d_min cos a) > theta  (param = tan theta)
@@ -185,21 +186,6 @@ def _link_row(
             small = d2 if d1 > d2 else d1
             den = big - small * cos_a
             out[c] = (d1 > 0) & (d2 > 0) & ((den <= 0.0) | (small * sin_a > param * den))
-
-
-#: multiplying 8 bytes of 0/1 by this gathers them in the top byte: byte b -> bit 56 + b
-_MAGIC_PACK = np.uint64(0x0102040810204080)
-
-
-@njit(cache=True, inline="always")
-def _pack(flags: np.ndarray, words: np.ndarray) -> None:
-    """Bit ``b`` of ``words[k]`` = ``flags[64 k + b]`` (flags: uint8 0/1, 64 per word)."""
-    f8 = flags.view(np.uint64)
-    for k in range(words.size):
-        acc = np.uint64(0)
-        for b in range(8):
-            acc |= ((f8[8 * k + b] * _MAGIC_PACK) >> np.uint64(56)) << np.uint64(8 * b)
-        words[k] = acc
 
 
 @njit(cache=True, inline="always")
@@ -374,9 +360,9 @@ def _label_row(
     row = r * w
     rowu = np.uint64(row)
     wu = np.uint64(w)
-    _pack(node[: 64 * nw], node_w[:nw])
-    _pack(left[: 64 * nw], left_w[:nw])
-    _pack(up[: 64 * nw], up_w[:nw])
+    pack(node[: 64 * nw], node_w[:nw])
+    pack(left[: 64 * nw], left_w[:nw])
+    pack(up[: 64 * nw], up_w[:nw])
     # the runs' first and last pixels, word by word; only set bits are visited
     ns = 0
     ne = 0
@@ -564,7 +550,7 @@ def _components(
                 if r + kr < h:
                     below = row + kr * w
                     _differ(flags[:w], comp[row : row + w], comp[below : below + w])
-                    _pack(flags[: 64 * nw], flag_w)
+                    pack(flags[: 64 * nw], flag_w)
                     _join_flagged(
                         flag_w, mask_v, comp, nodes, parent, row, below, w, w,
                         angles[m, r, 0], angles[m, r, 1], criterion, param,
@@ -574,7 +560,7 @@ def _components(
                     i0 = row + c0
                     i1 = row + last - kc + 1
                     _differ(flags[c0 : last - kc + 1], comp[i0:i1], comp[i0 + kc : i1 + kc])
-                    _pack(flags[: 64 * nw], flag_w)
+                    pack(flags[: 64 * nw], flag_w)
                     _join_flagged(
                         flag_w, mask_h, comp, nodes, parent, row, row + kc, w, w,
                         angles[m, r, 2], angles[m, r, 3], criterion, param,
@@ -594,7 +580,7 @@ def _components(
                 if r + kr < h:
                     below = row + kr * w
                     _differ(flags[:w], comp[row : row + w], comp[below : below + w])
-                    _pack(flags[: 64 * nw], flag_w)
+                    pack(flags[: 64 * nw], flag_w)
                     _join_flagged(
                         flag_w, mask_v, comp, nodes, parent, row, below, w, w,
                         angles[m, r, 0], angles[m, r, 1], criterion, param,
@@ -603,7 +589,7 @@ def _components(
                     rest = w - shift
                     _differ(flags[:rest], comp[row : row + rest], comp[row + shift : row + w])
                     _differ(flags[rest:w], comp[row + rest : row + w], comp[row : row + shift])
-                    _pack(flags[: 64 * nw], flag_w)
+                    pack(flags[: 64 * nw], flag_w)
                     _join_flagged(
                         flag_w, mask_v, comp, nodes, parent, row, row + shift, rest, w,
                         angles[m, r, 2], angles[m, r, 3], criterion, param,

@@ -54,17 +54,16 @@ from numba import njit
 from pydantic import Field
 from pydantic.dataclasses import dataclass
 
+from flic_cli.bitwords import pack, trailing_zeros
 from flic_cli.config.component import STRICT
 from flic_cli.methods._unionfind import (
     _label_row,
     _number,
-    _pack,
     _run_buffers,
     _union,
     kernel_inputs,
     pixel_output,
     point_output,
-    trailing_zeros,
 )
 from flic_cli.methods.base import point_weights
 from flic_cli.range_image import RangeImage
@@ -360,10 +359,10 @@ def _bridge_components(
             ur_link[0] = ur[0] & out
             ul_go[0] = ul_on[0] & out
             ur_go[0] = ur_on[0] & out
-            _pack(ul_link[: 64 * nw], ul_w)
-            _pack(ur_link[: 64 * nw], ur_w)
-            _pack(ul_go[: 64 * nw], on_w[2])
-            _pack(ur_go[: 64 * nw], on_w[3])
+            pack(ul_link[: 64 * nw], ul_w)
+            pack(ur_link[: 64 * nw], ur_w)
+            pack(ul_go[: 64 * nw], on_w[2])
+            pack(ur_go[: 64 * nw], on_w[3])
             for k in range(nw):
                 bits = ul_w[k]
                 while bits:
@@ -377,8 +376,8 @@ def _bridge_components(
                     bits &= bits - one
                     j = row - w + (c + 1 if c < w - 1 else 0)
                     _union(parent, labels[row + c], labels[j])
-        _pack(left_on[: 64 * nw], on_w[0])
-        _pack(up_on[: 64 * nw], on_w[1])
+        pack(left_on[: 64 * nw], on_w[0])
+        pack(up_on[: 64 * nw], on_w[1])
         _walk_row(
             r, w, on_w, nodes, rf, labels, parent, cos_t, sin_t, threshold, sin_gamma, k_row,
             k_up, walks, link_c, link_q,
