@@ -133,33 +133,36 @@ def _seed_window(
 
 
 @njit(cache=True)
-def _geometry_row(
+def _geometry(
     ranges: np.ndarray,
-    se: float,
-    ce: float,
+    sin_el: np.ndarray,
+    cos_el: np.ndarray,
     rho: np.ndarray,
     z: np.ndarray,
     up_rho: np.ndarray,
     up_z: np.ndarray,
-    cur_rho: np.ndarray,
-    cur_z: np.ndarray,
 ) -> None:
-    """One row, top to bottom: horizontal range ``rho`` and height ``z`` of its pixels (0, 0
-    where empty), and ``up_rho``, ``up_z``: those of the next valid cell above in the column
-    (0, 0: none), from ``cur_rho``, ``cur_z`` (the last valid cell of the rows above, updated).
-    Branch-free, so that it runs as vector code."""
-    for c in range(ranges.shape[0]):
-        rv = ranges[c] * ce
-        zv = ranges[c] * se
-        rho[c] = rv
-        z[c] = zv
-        cr = cur_rho[c]
-        cz = cur_z[c]
-        up_rho[c] = cr
-        up_z[c] = cz
-        valid = rv > 0.0
-        cur_rho[c] = rv if valid else cr
-        cur_z[c] = zv if valid else cz
+    """Horizontal range ``rho`` and height ``z`` of every pixel (0, 0 where empty), and
+    ``up_rho``, ``up_z``: those of the next valid cell above it in its column (0, 0: none).
+    Row by row from the top, branch-free, so that every row runs as vector code."""
+    h, w = ranges.shape
+    cur_rho = np.zeros(w, dtype=np.float32)  # the last valid cell of the rows so far
+    cur_z = np.zeros(w, dtype=np.float32)
+    for r in range(h):
+        se = sin_el[r]
+        ce = cos_el[r]
+        for c in range(w):
+            rv = ranges[r, c] * ce
+            zv = ranges[r, c] * se
+            rho[r, c] = rv
+            z[r, c] = zv
+            cr = cur_rho[c]
+            cz = cur_z[c]
+            up_rho[r, c] = cr
+            up_z[r, c] = cz
+            valid = rv > 0.0
+            cur_rho[c] = rv if valid else cr
+            cur_z[c] = zv if valid else cz
 
 
 @njit(cache=True)
@@ -241,9 +244,10 @@ def _column_ground(
     parameters in the ``_P_*`` layout.
 
     Every row, from the bottom, in three passes: steps 1, 2 and 5 for every column in vector
-    code (:func:`_columns_row`); then the cells that step 3 or 4 asks about, one by one, where
-    the cells above decide; then step 6 on the gaps between consecutive cells taken so far. The
-    columns are independent within a row, so the order of the passes does not change the mask
+    code (:func:`_columns_row`); then the cells that step 3 or 4 asks about, one by one (the set
+    bits of their packed flags), where the cells above decide; then step 6 on the gaps between
+    consecutive cells taken so far (from the flips of the packed taken flags). The columns are
+    independent within a row, so the order of the passes does not change the mask
     (tests/test_ground_column.py pins it against the rule written cell by cell). The tests on
     the cells above are written out here rather than called as helpers: numba passes the images
     to a helper with atomic reference-count updates, which took a third of the time on scans
@@ -266,11 +270,7 @@ def _column_ground(
     z_img = np.empty((h, w), dtype=np.float32)
     up_rho = np.empty((h, w), dtype=np.float32)
     up_z = np.empty((h, w), dtype=np.float32)
-    cur_rho = np.zeros(w, dtype=np.float32)
-    cur_z = np.zeros(w, dtype=np.float32)
-    for r in range(h):
-        _geometry_row(ranges[r], sin_el[r], cos_el[r], rho_img[r], z_img[r], up_rho[r],
-                      up_z[r], cur_rho, cur_z)  # fmt: skip
+    _geometry(ranges, sin_el, cos_el, rho_img, z_img, up_rho, up_z)
     out = np.zeros((h, w), dtype=np.bool_)
     g_rho = np.full(w, -1.0)  # last ground point of the column (-1: none yet)
     g_z = np.zeros(w)
