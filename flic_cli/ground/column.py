@@ -402,36 +402,31 @@ def _column_ground(
                 q0 = lo_q if part == 0 else start_b
                 q1 = end_a if part == 0 else hi_q
                 for q in range(q0, q1):
+                    # branch-free: whether a cell is ground here is data that no branch
+                    # predictor guesses
                     uq = np.uintp(q)
                     rho = rrow[uq]
-                    if rho <= 0.0:
-                        continue
                     z = zrow[uq]
-                    in_a = a >= 0 and q - a <= nb_px
-                    in_b = b >= 0 and b - q <= nb_px
-                    hit = in_a and abs(rho - a_rho) <= _ROW_DRHO_M and abs(z - a_z) <= nb_band
-                    if not hit and in_b:
-                        hit = abs(rho - b_rho) <= _ROW_DRHO_M and abs(z - b_z) <= nb_band
-                    if not hit:
-                        continue
+                    in_a = (a >= 0) & (q - a <= nb_px)
+                    in_b = (b >= 0) & (b - q <= nb_px)
+                    hit = in_a & (abs(rho - a_rho) <= _ROW_DRHO_M) & (abs(z - a_z) <= nb_band)
+                    hit |= in_b & (abs(rho - b_rho) <= _ROW_DRHO_M) & (abs(z - b_z) <= nb_band)
                     # unless the cell is stood on: the next valid cell above (within
                     # _FOOT_ROWS rows) rises from it more steeply than tan_foot, or is nearer by
                     # _UNDER_MIN_M to `under`
-                    stood = False
-                    ra = r - 1
-                    while ra >= 0 and ra >= r - _FOOT_ROWS:
-                        ua = np.uintp(ra)
-                        ra_rho = rho_img[ua, uq]
-                        if ra_rho > 0.0:
-                            d = ra_rho - rho
-                            if d < -_UNDER_MIN_M:
-                                stood = d > -under
-                            else:
-                                stood = z_img[ua, uq] - z > tan_foot * abs(d)
-                            break
-                        ra -= 1
-                    if not stood:
-                        orow[uq] = True
+                    found = False
+                    up_r = np.float32(0.0)
+                    up_h = np.float32(0.0)
+                    for k in range(1, _FOOT_ROWS + 1):
+                        ua = np.uintp(r - k if r >= k else 0)
+                        x = rho_img[ua, uq]
+                        now = ~found & (r >= k) & (x > 0.0)
+                        up_r = x if now else up_r
+                        up_h = z_img[ua, uq] if now else up_h
+                        found |= now
+                    d = up_r - rho
+                    steep = (d > -under) if d < -_UNDER_MIN_M else (up_h - z > tan_foot * abs(d))
+                    orow[uq] = (rho > 0.0) & hit & ~(found & steep)
     return out
 
 
