@@ -526,3 +526,80 @@ def test_row_neighbours_keep_ground_under_a_near_occluder():
         z2[1, 15:21] = r2[1, 15:21] * np.tan(el1)
         got = column_ground(_image_of(r2, z2), under_m=2.0)[2, 15:21]
         assert (not got.any()) if kept else got.all()
+
+
+# ---- step 7: points hidden behind their pixel's nearest point --------------------------------
+
+
+def _hidden_scan() -> tuple[RangeImage, np.ndarray, np.ndarray]:
+    """Two rows of road 1.73 m below the sensor, 20 columns, one point per pixel; pixel (1, 10)
+    holds an object's point 2 m nearer and, behind it, a road point and a point 0.5 m above the
+    road (both hidden). Returns the image (ring projection: several points per pixel), the
+    points and the mask of a remover that took every road pixel."""
+    el = np.array([-0.15, -0.2])
+    h, w = 2, 20
+    road = H_S / np.sin(-el)  # range of the road per row
+    ranges = np.repeat(road[:, None], w, axis=1).astype(np.float32)
+    ranges[1, 10] = road[1] - 2.0
+    az = np.pi - (np.arange(w) + 0.5) * (2 * np.pi / w)
+
+    def point(r: int, c: int, d: float, dz: float = 0.0) -> list[float]:
+        rho = d * np.cos(el[r])
+        return [rho * np.cos(az[c]), rho * np.sin(az[c]), d * np.sin(el[r]) + dz]
+
+    pts = [point(r, c, ranges[r, c]) for r in range(h) for c in range(w)]
+    pix = list(range(h * w))
+    pts += [point(1, 10, road[1]), point(1, 10, road[1], dz=0.5)]
+    pix += [w + 10, w + 10]
+    points = np.array(pts, dtype=np.float32)
+    counts = np.bincount(pix, minlength=h * w).reshape(h, w).astype(np.int32)
+    image = RangeImage(ranges, el, np.array(pix, dtype=np.int64), "rings", counts)
+    mask = np.ones((h, w), dtype=bool)
+    mask[1, 10] = False
+    return image, points, mask
+
+
+def test_step_7_takes_a_hidden_road_point_and_keeps_the_object_and_a_raised_point():
+    image, points, mask = _hidden_scan()
+    got = ColumnGround().point_ground(image, points, mask)
+    n = mask.size
+    assert got[:n].tolist() == mask.reshape(-1).tolist()  # the pixels' own points
+    assert got[n:].tolist() == [True, False]  # the road point behind the object; not 0.5 m up
+    # off, or on a sensor's own image (one point per pixel): every point takes its pixel's
+    assert ColumnGround(hidden_points=False).point_ground(image, points, mask) is None
+    native = RangeImage(image.ranges, image.elevation, np.arange(n), "native")
+    assert ColumnGround().point_ground(native, points[:n], mask) is None
+    # the row test: no taken pixel within reach of the point, nothing taken
+    far = mask.copy()
+    far[1, :] = False
+    assert not ColumnGround().point_ground(image, points, far)[n:].any()
+
+
+def test_the_clusterers_leave_out_the_points_taken_behind_a_pixel():
+    from flic_cli.ground.base import extract_ground
+    from flic_cli.methods.dbscan import Dbscan
+    from flic_cli.methods.flic import Flic
+
+    image, points, mask = _hidden_scan()
+    remover = ColumnGround()
+    ground = extract_ground(lambda im, pts: mask, image, points)  # a remover without step 7
+    assert ground.image is image and ground.decided is None
+    assert ground.on_ground.tolist() == mask.reshape(-1)[image.point_pixel].tolist()
+
+    class WithStep7:
+        def __call__(self, im: RangeImage, pts: np.ndarray) -> np.ndarray:
+            return mask
+
+        point_ground = remover.point_ground
+
+    ground = extract_ground(WithStep7(), image, points)
+    n = mask.size
+    assert ground.on_ground[n:].tolist() == [True, False]
+    assert ground.image.point_pixel[n] == -1  # the hidden road point left its pixel
+    assert ground.image.point_pixel[n + 1] == 20 + 10
+    assert ground.image.counts[1, 10] == 2 and image.counts[1, 10] == 3
+    # every clusterer gives it no label; the pixel's other points keep theirs
+    flic = Flic(min_size=1).segment(ground.image, points, ground.mask)
+    assert flic[n] == 0 and flic[20 + 10] > 0 and flic[n + 1] == flic[20 + 10]
+    dbscan = Dbscan(eps_m=3.0, min_samples=1, min_size=1).segment(ground.image, points, mask)
+    assert dbscan[n] == 0 and dbscan[20 + 10] > 0

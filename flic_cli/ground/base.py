@@ -1,7 +1,9 @@
-"""The one interface every ground remover implements, and the map from per-point to per-pixel."""
+"""The one interface every ground remover implements, the decision per point, and the maps between
+points and pixels."""
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 from collections.abc import Callable
 from typing import Protocol
@@ -19,9 +21,80 @@ class GroundRemover(Protocol):
 
     ``points`` are the (N, 3) points of the evaluated point set, point i in pixel
     ``image.point_pixel[i]``; removers that work on the image alone ignore them.
+
+    A remover may also decide per point (``point_ground(image, points, mask) -> (N,) bool``, or
+    None for its pixels' decision): where a pixel holds several points (a projected scan), those
+    behind the nearest one need not share its decision. Without that method every point takes its
+    pixel's decision (:func:`point_ground`); see :func:`extract_ground`.
     """
 
     def __call__(self, image: RangeImage, points: np.ndarray) -> np.ndarray: ...
+
+
+@dataclasses.dataclass(frozen=True)
+class Ground:
+    """A remover's decision on one scan, as the clusterers take it.
+
+    Attributes
+    ----------
+    mask : (H, W) bool, the ground pixels.
+    image : the range image the clusterers see: the scan's image, except that the points taken
+        as ground whose pixel is not ground have left their pixel (``point_pixel`` -1, not in
+        the pixel's point count), so that no clusterer counts or labels them.
+    decided : (N,) bool, the remover's own decision per point, or None where every point takes
+        its pixel's.
+    """
+
+    mask: np.ndarray
+    image: RangeImage
+    decided: np.ndarray | None = None
+
+    @property
+    def on_ground(self) -> np.ndarray:
+        """(N,) bool, the points taken as ground."""
+        return point_ground(self.image, self.mask) if self.decided is None else self.decided
+
+
+def point_ground(image: RangeImage, ground: np.ndarray) -> np.ndarray:
+    """Per-point ground decision from a per-pixel mask: every point takes its pixel's.
+
+    Parameters
+    ----------
+    image : the range image the mask was computed on (``point_pixel`` maps points to pixels).
+    ground : (H, W) bool, True = ground pixel.
+
+    Returns
+    -------
+    (N,) bool, True where the point's pixel is ground; False for points without a pixel.
+    """
+    flat = np.asarray(ground, dtype=bool).reshape(-1)
+    pix = image.point_pixel
+    if pix.size and pix.min() >= 0:
+        return flat[pix]
+    out = np.zeros(pix.size, dtype=bool)
+    has = pix >= 0
+    out[has] = flat[pix[has]]
+    return out
+
+
+def extract_ground(remover: GroundRemover, image: RangeImage, points: np.ndarray) -> Ground:
+    """Run ``remover`` on a scan: its pixel mask, its per-point decision, and the image the
+    clusterers see (:class:`Ground`)."""
+    mask = remover(image, points)
+    decide = getattr(remover, "point_ground", None)
+    decided = None if decide is None else decide(image, points, mask)
+    if decided is None:
+        return Ground(mask, image)
+    pix, counts, moved = _leave_pixels(
+        np.ascontiguousarray(image.point_pixel, dtype=np.int64),
+        np.ascontiguousarray(mask, dtype=np.bool_).reshape(-1),
+        decided,
+        np.ascontiguousarray(image.point_counts(), dtype=np.int32).reshape(-1),
+    )
+    if not moved:
+        return Ground(mask, image, decided)
+    clustered = dataclasses.replace(image, point_pixel=pix, counts=counts.reshape(image.shape))
+    return Ground(mask, clustered, decided)
 
 
 def per_sensor(
@@ -46,6 +119,24 @@ def per_sensor(
         return cached(np.ascontiguousarray(elevation, dtype=np.float64).tobytes(), *args)
 
     return call
+
+
+@njit(cache=True)
+def _leave_pixels(
+    point_pixel: np.ndarray, mask: np.ndarray, on_ground: np.ndarray, counts: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, bool]:
+    """``point_pixel`` and ``counts`` without the ground points of pixels that are not ground
+    (their pixel -1, not counted), and whether there were any."""
+    pix = point_pixel.copy()
+    out = counts.copy()
+    moved = False
+    for i in range(pix.size):
+        p = pix[i]
+        if p >= 0 and on_ground[i] and not mask[p]:
+            pix[i] = -1
+            out[p] -= 1
+            moved = True
+    return pix, out, moved
 
 
 @njit(cache=True)

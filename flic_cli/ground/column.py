@@ -53,6 +53,15 @@ residual is ``e = z - (z_g + m dr)``.
    0.3 m to ``under_m`` (ground seen under a car's body within its length, which the labels give
    to the car). Cells taken this way are not references themselves (no chains), and the column
    models do not follow them.
+7. **Hidden points** (projected scans only: a sensor's own image holds one point per pixel). A
+   pixel's range is that of its nearest point; on a projected KITTI scan about 9 % of the points
+   lie behind the nearest one of their pixel, and every point of a pixel would share its
+   decision. Ground seen just behind or under an object's lowest edge then stays with the
+   object's pixel. So a point hidden behind its pixel's nearest point, in a pixel not taken, is
+   ground when a pixel taken in the same row, at most ``neighbour_px`` columns away, is within
+   1 m of its horizontal range and ``neighbour_band_m`` of its height (step 6's test, on the
+   point itself; :meth:`ColumnGround.point_ground`). The clusterers then leave such points out
+   (:func:`flic_cli.ground.base.extract_ground`).
 
 Empty pixels are never ground. Every cell is visited once (a few cells above it are read for
 steps, seeds and the foot test), so the cost is linear in the image size. The image is not
@@ -96,6 +105,7 @@ _BASE_DR_M = 1.0  # the base band applies within this distance beyond the last g
 _ROW_DRHO_M = 1.0  # a row neighbour is at most this much nearer or farther
 _FOOT_ROWS = 2  # the foot test reads the next valid cell within this many rows above
 _UNDER_MIN_M = 0.3  # a cell above nearer by more than this is an occluder (foot test)
+_HIDDEN_M = 1e-3  # a point this much farther than its pixel's range is hidden behind it (7.)
 
 # Layout of the parameter vector of :func:`_column_ground` (one array: one argument to type).
 (_P_SENSOR, _P_NOISE, _P_TAN_CHANGE, _P_KERB, _P_MAX_STEP, _P_TAN_FLAT, _P_SEED_TOL,
@@ -430,6 +440,50 @@ def _column_ground(
     return out
 
 
+@njit(cache=True)
+def _points_ground(
+    ranges: np.ndarray,
+    sin_el: np.ndarray,
+    cos_el: np.ndarray,
+    mask: np.ndarray,
+    point_pixel: np.ndarray,
+    xyz: np.ndarray,
+    reach: int,
+    band: float,
+) -> np.ndarray:
+    """(N,) ground points: those of ground pixels, and by step 7 the points hidden behind their
+    pixel's nearest point (farther than the pixel's range, by more than 1 mm) where that pixel
+    is not ground."""
+    h, w = ranges.shape
+    flat = mask.reshape(h * w)
+    rng = ranges.reshape(h * w)
+    out = np.zeros(point_pixel.size, dtype=np.bool_)
+    for i in range(point_pixel.size):
+        p = point_pixel[i]
+        if p < 0:
+            continue
+        if flat[p]:
+            out[i] = True
+            continue
+        x = np.float64(xyz[i, 0])
+        y = np.float64(xyz[i, 1])
+        z = np.float64(xyz[i, 2])
+        if np.sqrt(x * x + y * y + z * z) <= np.float64(rng[p]) + _HIDDEN_M:
+            continue  # the pixel's nearest point (or as near)
+        r = p // w
+        c = p % w
+        rho = np.sqrt(x * x + y * y)
+        ce = np.float64(cos_el[r])
+        se = np.float64(sin_el[r])
+        for cc in range(max(c - reach, 0), min(c + reach + 1, w)):
+            if mask[r, cc]:
+                d = np.float64(ranges[r, cc])
+                if abs(d * ce - rho) <= _ROW_DRHO_M and abs(d * se - z) <= band:
+                    out[i] = True
+                    break
+    return out
+
+
 @per_sensor
 def _row_trig(el: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Sine and cosine of every row as float32 (the precision of the ranges they multiply)."""
@@ -487,6 +541,8 @@ class ColumnGround:
     neighbour_band_m : height band around a row neighbour, metres.
     foot_deg : steeper rise to the cell above marks a foot (kept), degrees.
     under_m : ground under a nearer occluder up to this far behind it is kept, metres.
+    hidden_points : step 7, the points hidden behind their pixel's nearest point decided one by
+        one (projected scans; a sensor's own image has none).
     """
 
     sensor_height_m: Annotated[float, Field(gt=0, description="metres")] = 1.73
@@ -501,6 +557,7 @@ class ColumnGround:
     neighbour_band_m: Annotated[float, Field(ge=0, description="metres")] = 0.08
     foot_deg: Annotated[float, Field(gt=0, lt=90, description="degrees")] = 30.0
     under_m: Annotated[float, Field(ge=0, description="metres")] = 2.0
+    hidden_points: bool = True
 
     def __call__(self, image: RangeImage, points: np.ndarray | None = None) -> np.ndarray:
         """(H, W) bool ground mask of ``image`` (see :func:`column_ground`)."""
@@ -518,6 +575,27 @@ class ColumnGround:
             self.neighbour_band_m,
             self.foot_deg,
             self.under_m,
+        )
+
+    def point_ground(
+        self, image: RangeImage, points: np.ndarray, mask: np.ndarray
+    ) -> np.ndarray | None:
+        """(N,) bool ground points: those of ground pixels, and by step 7 (module docstring)
+        the points hidden behind their pixel's nearest point where that pixel is not ground;
+        None (every point takes its pixel's decision) without step 7 or on a sensor's own
+        image, which has no hidden points."""
+        if not self.hidden_points or image.projection == "native":
+            return None
+        sin_el, cos_el = _row_trig(image.elevation)
+        return _points_ground(
+            np.ascontiguousarray(image.ranges, dtype=np.float32),
+            sin_el,
+            cos_el,
+            np.ascontiguousarray(mask, dtype=np.bool_),
+            np.ascontiguousarray(image.point_pixel, dtype=np.int64),
+            np.ascontiguousarray(points),
+            int(self.neighbour_px),
+            float(self.neighbour_band_m),
         )
 
 

@@ -12,8 +12,8 @@ Conventions
 - Thing-object points are those of :func:`flic_cli.classes.thing_mask` (a thing class and a non-zero
   instance id): the points whose removal costs IoU.
 - The decision: a remover marks pixels; a point is taken as ground when its pixel is
-  (:func:`point_ground`). Every point in a pixel shares the decision, as it shares the pixel's
-  cluster id.
+  (:func:`point_ground`), or where the remover decides per point, by that decision
+  (:func:`flic_cli.ground.base.extract_ground`).
 """
 
 from __future__ import annotations
@@ -23,7 +23,7 @@ from dataclasses import dataclass, fields
 import numpy as np
 
 from flic_cli.classes import ground_mask, thing_mask
-from flic_cli.range_image import RangeImage
+from flic_cli.ground.base import point_ground
 
 __all__ = ["GroundCounts", "ground_counts", "ground_scores", "point_ground"]
 
@@ -76,28 +76,6 @@ class GroundCounts:
     def things_removed_share(self) -> float:
         """Share of the thing-object points taken as ground (nan if there are none)."""
         return self.things_removed / self.things if self.things else float("nan")
-
-
-def point_ground(image: RangeImage, ground: np.ndarray) -> np.ndarray:
-    """Per-point ground decision from a remover's per-pixel mask.
-
-    Parameters
-    ----------
-    image : the range image the mask was computed on (``point_pixel`` maps points to pixels).
-    ground : (H, W) bool, True = ground pixel.
-
-    Returns
-    -------
-    (N,) bool, True where the point's pixel is ground; False for points without a pixel.
-    """
-    flat = np.asarray(ground, dtype=bool).reshape(-1)
-    pix = image.point_pixel
-    if pix.size and pix.min() >= 0:
-        return flat[pix]
-    out = np.zeros(pix.size, dtype=bool)
-    has = pix >= 0
-    out[has] = flat[pix[has]]
-    return out
 
 
 def ground_counts(labels: np.ndarray, on_ground: np.ndarray) -> GroundCounts:

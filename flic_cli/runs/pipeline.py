@@ -19,6 +19,7 @@ from flic_cli.classes import ground_mask
 from flic_cli.config import Config
 from flic_cli.config.component import check_installed
 from flic_cli.errors import FlicInputError
+from flic_cli.ground.base import Ground, extract_ground
 from flic_cli.io.base import Frame, FrameRef
 from flic_cli.projection import Projection
 from flic_cli.range_image import RangeImage
@@ -193,10 +194,26 @@ class Segmenter:
         """The remover's (H, W) ground mask, or None when there is no remover."""
         return None if self.remover is None else self.remover(image, points)
 
+    def ground_step(self, image: RangeImage, points: np.ndarray) -> Ground | None:
+        """The remover's decision as the clusterers take it (:func:`extract_ground`), or None
+        when there is no remover."""
+        return None if self.remover is None else extract_ground(self.remover, image, points)
+
+    def cluster(self, image: RangeImage, points: np.ndarray, ground: Ground | None) -> np.ndarray:
+        """The method's per-point labels given the ground step's result (or None)."""
+        if ground is None:
+            return self.method.segment(image, points, None)
+        return self.method.segment(ground.image, points, ground.mask)
+
+    def run(self, image: RangeImage, points: np.ndarray) -> tuple[np.ndarray, Ground | None]:
+        """Per-point labels (0 = none or ground) and the ground step's result (or None)."""
+        ground = self.ground_step(image, points)
+        return self.cluster(image, points, ground), ground
+
     def __call__(self, image: RangeImage, points: np.ndarray) -> tuple[np.ndarray, Any]:
-        """Per-point labels (0 = none) and the ground mask used (or None)."""
-        ground = self.extract_ground(image, points)
-        return self.method.segment(image, points, ground), ground
+        """Per-point labels (0 = none or ground) and the ground mask used (or None)."""
+        labels, ground = self.run(image, points)
+        return labels, None if ground is None else ground.mask
 
     def with_param(self, value: float) -> Segmenter:
         """The same segmenter with the method's main parameter (sweeps) set to ``value``."""

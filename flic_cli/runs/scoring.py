@@ -13,16 +13,16 @@ from __future__ import annotations
 import dataclasses
 import time
 from dataclasses import dataclass, field
-from typing import Any
 
 import numpy as np
 
 from flic_cli.classes import class_name
 from flic_cli.errors import FlicInputError
+from flic_cli.ground.base import Ground
 from flic_cli.io import read_label, read_scan
 from flic_cli.io.base import Frame, FrameRef
 from flic_cli.metrics import distance_band, score_frame
-from flic_cli.metrics.ground import ground_counts, point_ground
+from flic_cli.metrics.ground import ground_counts
 from flic_cli.metrics.panoptic import agnostic_panoptic_counts
 from flic_cli.projection import Projection
 from flic_cli.runs.pipeline import (
@@ -166,7 +166,7 @@ class ScoreJob:
             for seg in segmenters:
                 ground, ground_seconds = grounds.get(seg)
                 start = time.perf_counter()
-                labels = seg.method.segment(prep.image, prep.points, ground)
+                labels = seg.cluster(prep.image, prep.points, ground)
                 seconds = time.perf_counter() - start + ground_seconds
                 add_scores(out, seg.name, setting, prep, labels, seconds, ground_seconds)
             grounds.add_records(out)
@@ -213,30 +213,30 @@ def semantics_labels(frame: Frame) -> np.ndarray:
 
 
 class GroundCache:
-    """Each remover's ground mask of one prepared frame, extracted once and timed.
+    """Each remover's ground step on one prepared frame, run once and timed.
 
     Its time is counted in every method that uses it (as if each method ran alone).
     """
 
     def __init__(self, prep: Prepared) -> None:
         self.prep = prep
-        self.masks: dict[str | None, tuple[Any, float]] = {}
+        self.steps: dict[str | None, tuple[Ground | None, float]] = {}
 
-    def get(self, seg: Segmenter) -> tuple[np.ndarray | None, float]:
-        """The ground mask of ``seg``'s remover (None without one) and its extraction time."""
-        if seg.ground_name not in self.masks:
+    def get(self, seg: Segmenter) -> tuple[Ground | None, float]:
+        """The ground step of ``seg``'s remover (None without one) and its time."""
+        if seg.ground_name not in self.steps:
             start = time.perf_counter()
-            mask = seg.extract_ground(self.prep.image, self.prep.points)
-            self.masks[seg.ground_name] = (mask, time.perf_counter() - start)
-        return self.masks[seg.ground_name]
+            ground = seg.ground_step(self.prep.image, self.prep.points)
+            self.steps[seg.ground_name] = (ground, time.perf_counter() - start)
+        return self.steps[seg.ground_name]
 
     def add_records(self, out: FrameScores) -> None:
         """Append each remover's ground scores of this frame (against the ground classes)."""
         assert self.prep.labels is not None
-        for name, (mask, seconds) in self.masks.items():
-            if name is None:
+        for name, (ground, seconds) in self.steps.items():
+            if name is None or ground is None:
                 continue
-            counts = ground_counts(self.prep.labels, point_ground(self.prep.image, mask))
+            counts = ground_counts(self.prep.labels, ground.on_ground)
             row = {"remover": name, "sequence": self.prep.ref.sequence,
                    "frame": self.prep.ref.frame, **dataclasses.asdict(counts),
                    "seconds": round(seconds, 6)}  # fmt: skip

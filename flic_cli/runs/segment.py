@@ -23,11 +23,11 @@ import numpy as np
 
 from flic_cli.config import Config
 from flic_cli.errors import FlicInputError
+from flic_cli.ground.base import Ground
 from flic_cli.io import open_dataset
 from flic_cli.io.atomic import staged_folder
 from flic_cli.io.base import FrameRef
 from flic_cli.io.ply import write_ply
-from flic_cli.metrics.ground import point_ground
 from flic_cli.projection import Projection
 from flic_cli.runs.frames import FrameLoop, Skipped, sort_skipped, write_skipped
 from flic_cli.runs.output import check_output_dir
@@ -55,13 +55,13 @@ class Segmented:
     ----------
     prep : the prepared frame (range image, evaluated points and their labels).
     labels : (N,) cluster id of every evaluated point (0 = none).
-    ground : (H, W) ground mask used, or None.
+    ground : the ground step's result (its mask and its ground points), or None.
     semantics : (N_scan,) classes written with the prediction (``--semantics``), or None.
     """
 
     prep: Prepared
     labels: np.ndarray
-    ground: np.ndarray | None
+    ground: Ground | None
     semantics: np.ndarray | None = None
 
     @property
@@ -69,10 +69,10 @@ class Segmented:
         return int(self.labels.max(initial=0))
 
     def ground_points(self) -> np.ndarray:
-        """(N,) bool, the evaluated points in a ground pixel."""
+        """(N,) bool, the evaluated points taken as ground."""
         if self.ground is None:
             return np.zeros(self.labels.shape[0], dtype=bool)
-        return point_ground(self.prep.image, self.ground)
+        return self.ground.on_ground
 
 
 @dataclass(frozen=True)
@@ -94,7 +94,7 @@ class SegmentJob:
         frame = self.dataset.load(ref)
         if self.semantics is None:
             prep = prepare(frame, self.setting, self.projection)
-            labels, ground = self.segmenter(prep.image, prep.points)
+            labels, ground = self.segmenter.run(prep.image, prep.points)
             return Segmented(prep, labels, ground)
         semantics = scan_semantics(frame, self.semantics)
         prep = prepare_semantic(frame, semantics, self.projection)
@@ -255,7 +255,8 @@ def _render(stage: Path, ref: FrameRef, result: Segmented, title: str) -> list[s
         f"views_{ref.sequence}_{ref.frame:06d}.png",
     ]
     prep = result.prep
-    render_segmentation(prep.image, result.labels, result.ground, stage / names[0], title=title)
+    mask = None if result.ground is None else result.ground.mask
+    render_segmentation(prep.image, result.labels, mask, stage / names[0], title=title)
     render_frame_views(
         stage / names[1],
         prep.points,

@@ -90,9 +90,9 @@ class SweepJob:
 
     def __call__(self, ref: FrameRef) -> np.ndarray:
         prep = prepare(load_labelled_frame(ref), self.setting, self.projection)
-        ground = self.segmenters[0].extract_ground(prep.image, prep.points)
+        ground = self.segmenters[0].ground_step(prep.image, prep.points)
         rows = [
-            match_objects(prep.labels, s.method.segment(prep.image, prep.points, ground)).iou
+            match_objects(prep.labels, s.cluster(prep.image, prep.points, ground)).iou
             for s in self.segmenters
         ]
         return np.vstack(rows) if rows else np.zeros((0, 0))
