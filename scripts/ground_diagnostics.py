@@ -42,8 +42,8 @@ def main() -> None:
         obj_pts = obj_removed = gnd_pts = gnd_removed = 0
         for ref in tqdm(ds.refs(), desc=remover, unit="frame"):
             prep = prepare(ds.load(ref), "ground", cfg.projection)
-            labels, ground = seg(prep.image, prep.points)
-            on_ground = ground.reshape(-1)[prep.image.point_pixel]
+            labels, ground = seg.run(prep.image, prep.points)
+            on_ground = ground.on_ground
             sem = prep.labels & 0xFFFF
             is_gnd = np.isin(sem, GROUND_CLASSES)
             gnd_pts += int(is_gnd.sum())

@@ -3,8 +3,8 @@
 Per remover, over all frames of the ground setting (every point of the scan projected):
 precision, recall and F1 of its ground decision against the ground classes, the share of
 thing-object points it removes (:mod:`flic_cli.metrics.ground`), and its median time per frame
-(the remover alone, single-threaded kernels, after a warm-up, ``--repeat`` calls per frame, the
-median kept).
+(the remover alone with its per-point decisions, :func:`flic_cli.ground.base.extract_ground`;
+single-threaded kernels, after a warm-up, ``--repeat`` calls per frame, the median kept).
 With ``--evaluate REMOVER=DIR``, the IoU_mu of every method in the ground and no-ground settings
 are read from ``DIR/table.csv`` of a ``flic evaluate --setting both --ground-remover REMOVER`` run
 and added as ``iou_ground_METHOD`` / ``gap_METHOD`` (no-ground minus ground) columns.
@@ -26,9 +26,10 @@ import numpy as np
 import pandas as pd
 
 from flic_cli.config import load_config
+from flic_cli.ground.base import extract_ground
 from flic_cli.io import open_dataset
 from flic_cli.io.atomic import write_table
-from flic_cli.metrics.ground import GroundCounts, ground_counts, ground_scores, point_ground
+from flic_cli.metrics.ground import GroundCounts, ground_counts, ground_scores
 from flic_cli.runs.pipeline import prepare
 
 
@@ -48,17 +49,17 @@ def main() -> None:
     rows = []
     for name in args.removers.split(","):
         remover = cfg.remover(name)
-        remover(frames[0].image, frames[0].points)  # warm-up (JIT, caches)
+        extract_ground(remover, frames[0].image, frames[0].points)  # warm-up (JIT, caches)
         counts = GroundCounts()
         times = []
         for prep in frames:
             per_call = []
             for _ in range(args.repeat):
                 t0 = time.perf_counter()
-                mask = remover(prep.image, prep.points)
+                ground = extract_ground(remover, prep.image, prep.points)
                 per_call.append(time.perf_counter() - t0)
             times.append(float(np.median(per_call)))
-            counts = counts + ground_counts(prep.labels, point_ground(prep.image, mask))
+            counts = counts + ground_counts(prep.labels, ground.on_ground)
         row = {"remover": name}
         row.update({k: round(v, 2) for k, v in ground_scores(counts).items()})
         row["ms_per_frame"] = round(1000 * float(np.median(times)), 3)
