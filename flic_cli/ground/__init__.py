@@ -13,12 +13,16 @@ points) -> (H, W) bool`` (True = ground pixel), see :class:`flic_cli.ground.base
 - the "No Ground" setting removes the ground classes' points by label before projection
   (:func:`flic_cli.classes.ground_mask`), so no remover runs.
 
+A remover may also decide per point (``point_ground(image, points, mask)``: ``column`` decides
+the points hidden behind their pixel's nearest point on a projected scan);
+:func:`flic_cli.ground.base.extract_ground` runs a remover and gives the clusterers its decision.
+
 To add a remover: a component class with ``__call__(image, points)``, named in
 :data:`flic_cli.registry.REMOVERS` under the name that ``[ground.NAME]`` config tables and
 ``--ground-remover`` use.
 """
 
-from flic_cli.ground.base import GroundRemover, pixel_mask, pixel_owners
+from flic_cli.ground.base import Ground, GroundRemover, extract_ground, pixel_mask, pixel_owners
 from flic_cli.ground.bogoslavskyi import BogoslavskyiGround, bogoslavskyi_ground
 from flic_cli.ground.column import ColumnGround, column_ground
 from flic_cli.ground.paper import PaperGround, paper_ground
@@ -33,11 +37,13 @@ __all__ = [
     "REMOVERS",
     "BogoslavskyiGround",
     "ColumnGround",
+    "Ground",
     "GroundRemover",
     "PaperGround",
     "PatchworkppGround",
     "bogoslavskyi_ground",
     "column_ground",
+    "extract_ground",
     "paper_ground",
     "pixel_mask",
     "pixel_owners",
