@@ -84,8 +84,8 @@ def run(args: argparse.Namespace) -> None:
         ref = refs[max(i - 1, 0) % len(refs)]
         frame = timed("read", ds.load, ref)
         prep = timed("project", prepare, frame, args.setting, cfg.projection)
-        ground = timed("ground", seg.extract_ground, prep.image, prep.points)
-        labels = timed("cluster+labels", seg.method.segment, prep.image, prep.points, ground)
+        ground = timed("ground", seg.ground_step, prep.image, prep.points)
+        labels = timed("cluster+labels", seg.cluster, prep.image, prep.points, ground)
         if prep.labels is not None:  # matches and segmentation statistics, as evaluate does
             timed("score", score_frame, prep.labels, labels, prep.points)
         if i == 0:  # warm-up frame (JIT cache load)
