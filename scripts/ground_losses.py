@@ -27,6 +27,7 @@ Usage::
 from __future__ import annotations
 
 import argparse
+import dataclasses
 from pathlib import Path
 
 import numpy as np
@@ -79,10 +80,9 @@ def main() -> None:
         prep = prepare(frame, "no-ground", cfg.projection)
         alone = merged_pairs(majority_clusters(seg_ng(prep.image, prep.points)[0], prep.labels))
         prep = prepare(frame, "ground", cfg.projection)
-        labels, ground = seg_g(prep.image, prep.points)
+        labels, ground = seg_g.run(prep.image, prep.points)
         clusters = majority_clusters(labels, prep.labels)
-        on_ground = ground.reshape(-1)[np.maximum(prep.image.point_pixel, 0)]
-        on_ground &= prep.image.point_pixel >= 0
+        on_ground = ground.on_ground
         ground_class = ground_mask(prep.labels)
         for obj, c in clusters.items():
             points = prep.labels == obj
@@ -107,10 +107,14 @@ def main() -> None:
             )
         for a, b in sorted(merged_pairs(clusters) - alone):
             cluster = labels == clusters[a]
-            stones = cluster & ground_mask(prep.labels) & (prep.image.point_pixel >= 0)
-            mask = ground.copy().reshape(-1)
-            mask[prep.image.point_pixel[stones]] = True
-            again = seg_g.method.segment(prep.image, prep.points, mask.reshape(ground.shape))
+            stones = cluster & ground_mask(prep.labels) & (ground.image.point_pixel >= 0)
+            mask = ground.mask.copy().reshape(-1)
+            mask[ground.image.point_pixel[stones]] = True
+            again = seg_g.cluster(
+                prep.image,
+                prep.points,
+                dataclasses.replace(ground, mask=mask.reshape(ground.mask.shape)),
+            )
             after = majority_clusters(again, prep.labels)
             rng = np.linalg.norm(prep.points[cluster, :3], axis=1)
             rows.append(
