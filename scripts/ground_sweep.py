@@ -33,7 +33,8 @@ from flic_cli.ground import ColumnGround
 from flic_cli.io import open_dataset
 from flic_cli.io.atomic import atomic_write
 from flic_cli.metrics import match_objects
-from flic_cli.metrics.ground import GroundCounts, ground_counts, ground_scores, point_ground
+from flic_cli.ground.base import Ground, extract_ground
+from flic_cli.metrics.ground import GroundCounts, ground_counts, ground_scores
 from flic_cli.runs.pipeline import prepare
 
 #: Values tried per parameter (the default is always included).
@@ -49,7 +50,9 @@ GRID: dict[str, list[float]] = {
     "neighbour_px": [0, 3, 5, 10, 20, 40],
     "neighbour_band_m": [0.02, 0.03, 0.05, 0.08, 0.12],
     "foot_deg": [15.0, 20.0, 30.0, 45.0, 60.0],
-    "under_m": [0.0, 1.0, 2.0, 3.0, 5.0],
+    "under_m": [0.0, 0.5, 1.0, 2.0, 3.0, 5.0],
+    # step 7 (hidden points)
+    "hidden_points": [False, True],
 }
 
 
@@ -64,13 +67,16 @@ def load_frames(root: Path, cfg: dict, limit: int | None) -> list[tuple]:
     return out
 
 
-def iou_mu(pairs: list[tuple], methods: dict, masks: list | None) -> dict[str, float]:
-    """IoU_mu in % per method; ``masks`` None = the no-ground setting."""
+def iou_mu(pairs: list[tuple], methods: dict, grounds: list[Ground] | None) -> dict[str, float]:
+    """IoU_mu in % per method; ``grounds`` None = the no-ground setting."""
     ious: dict[str, list] = {m: [] for m in methods}
     for k, (g, n) in enumerate(pairs):
-        prep = n if masks is None else g
+        prep = n if grounds is None else g
         for name, method in methods.items():
-            labels = method.segment(prep.image, prep.points, None if masks is None else masks[k])
+            if grounds is None:
+                labels = method.segment(prep.image, prep.points, None)
+            else:
+                labels = method.segment(grounds[k].image, prep.points, grounds[k].mask)
             ious[name].append(match_objects(prep.labels, labels).iou)
     return {f"iou_{m}": round(100 * float(np.mean(np.concatenate(v))), 2) for m, v in ious.items()}
 
@@ -101,16 +107,16 @@ def main() -> None:
                                           if v != defaults[p]]  # fmt: skip
             for param, value in runs:
                 remover = ColumnGround(**({} if param == "default" else {param: value}))
-                masks = [remover(g.image, g.points) for g, _ in pairs]
+                grounds = [extract_ground(remover, g.image, g.points) for g, _ in pairs]
                 counts = sum(
-                    (ground_counts(g.labels, point_ground(g.image, m)) for (g, _), m in
-                     zip(pairs, masks, strict=True)), GroundCounts()
+                    (ground_counts(g.labels, ground.on_ground) for (g, _), ground in
+                     zip(pairs, grounds, strict=True)), GroundCounts()
                 )  # fmt: skip
                 scores = {k: round(v, 2) for k, v in ground_scores(counts).items()}
                 row = {"data": set_name, "param": param,
                        "value": "" if value is None else value}  # fmt: skip
                 row.update(scores)
-                row.update(iou_mu(pairs, methods, masks))
+                row.update(iou_mu(pairs, methods, grounds))
                 for m in methods:
                     row[f"gap_{m}"] = round(reference[f"iou_{m}"] - row[f"iou_{m}"], 2)
                 rows.append(row)
