@@ -30,10 +30,10 @@ import pandas as pd
 
 from flic_cli.config import load_config
 from flic_cli.ground import ColumnGround
+from flic_cli.ground.base import Ground, extract_ground
 from flic_cli.io import open_dataset
 from flic_cli.io.atomic import atomic_write
 from flic_cli.metrics import match_objects
-from flic_cli.ground.base import Ground, extract_ground
 from flic_cli.metrics.ground import GroundCounts, ground_counts, ground_scores
 from flic_cli.runs.pipeline import prepare
 
