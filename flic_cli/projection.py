@@ -221,13 +221,14 @@ def _point_geometry(
 def _ring_pixels(
     rng: np.ndarray,
     az: np.ndarray,
+    flat: np.ndarray,
     ring_counts: np.ndarray,
     keep: np.ndarray,
     use_keep: bool,
     width: int,
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Nearest-point range image, points per pixel and pixel of every kept point (``rng``: the
-    points' ranges in metres).
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Nearest-point range image, points per pixel, pixel of every kept point and the nearest
+    point's height per pixel (``rng``: the points' ranges in metres; ``flat``: their (3N,) xyz).
 
     The rows are the rings (consecutive in scan order, ``ring_counts`` points each); the column
     is ``floor((pi - az) / (2 pi) * width) mod width``, the pixel ``row * width + column``.
@@ -242,6 +243,7 @@ def _ring_pixels(
         pix[i] = c
     ranges = np.zeros(rows * width, dtype=np.float32)
     counts = np.zeros(rows * width, dtype=np.int32)
+    z = np.zeros(rows * width, dtype=np.float32)
     j = 0
     start = 0
     for row in range(rows):
@@ -254,11 +256,12 @@ def _ring_pixels(
             r = rng[i]
             if ranges[p] == 0.0 or r < ranges[p]:
                 ranges[p] = r
+                z[p] = flat[3 * i + 2]
             counts[p] += 1
             pix[j] = p
             j += 1
         start = stop
-    return ranges, counts, pix[:j]
+    return ranges, counts, pix[:j], z
 
 
 @njit(cache=True)
@@ -446,14 +449,21 @@ def project_points(
     ring_counts = _ring_counts(az, rows, min_ring_points) if mode == "rings" else None
     if ring_counts is not None:
         use_keep = keep is not None
-        ranges, counts, pix = _ring_pixels(
-            rng, az, ring_counts, keep if use_keep else np.ones(1, dtype=bool), use_keep, width
+        ranges, counts, pix, z = _ring_pixels(
+            rng,
+            az,
+            flat,
+            ring_counts,
+            keep if use_keep else np.ones(1, dtype=bool),
+            use_keep,
+            width,
         )
         # median elevation of every ring (rings are consecutive in scan order)
         elev_pts = np.arcsin(sin_elev, out=sin_elev)
         elevation = _interpolate_rows(_segment_medians(elev_pts, ring_counts))
+        shape = (rows, width)
         return RangeImage(
-            ranges.reshape(rows, width), elevation, pix, "rings", counts.reshape(rows, width)
+            ranges.reshape(shape), elevation, pix, "rings", counts.reshape(shape), z.reshape(shape)
         )
     elev = np.arcsin(sin_elev, out=sin_elev)
     return _project_spherical(xyz, az, elev, width, rows, fov_up_deg, fov_down_deg, keep)
@@ -470,17 +480,20 @@ def _ranges_kernel(flat: np.ndarray, n: int) -> np.ndarray:
 
 @njit(cache=True)
 def _nearest_per_pixel(
-    rng: np.ndarray, pix: np.ndarray, n_pixels: int
-) -> tuple[np.ndarray, np.ndarray]:
-    """Range of the nearest point per pixel (0 = none) and points per pixel."""
+    rng: np.ndarray, z: np.ndarray, pix: np.ndarray, n_pixels: int
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Range of the nearest point per pixel (0 = none), points per pixel and the nearest
+    point's height ``z`` per pixel."""
     ranges = np.zeros(n_pixels, dtype=np.float32)
     counts = np.zeros(n_pixels, dtype=np.int32)
+    heights = np.zeros(n_pixels, dtype=np.float32)
     for i in range(pix.size):
         p = pix[i]
         if ranges[p] == 0.0 or rng[i] < ranges[p]:
             ranges[p] = rng[i]
+            heights[p] = z[i]
         counts[p] += 1
-    return ranges, counts
+    return ranges, counts, heights
 
 
 def _project_spherical(
@@ -497,14 +510,17 @@ def _project_spherical(
     vertical field of view."""
     rng = _ranges_kernel(xyz.reshape(-1), xyz.shape[0])
     cols = np.floor((np.pi - az) / (2.0 * np.pi) * width).astype(np.int64) % width
+    z = xyz[:, 2]
     if keep is not None:
-        rng, elev, cols = rng[keep], elev[keep], cols[keep]
+        rng, elev, cols, z = rng[keep], elev[keep], cols[keep], z[keep]
     up, down = np.radians(fov_up_deg), np.radians(fov_down_deg)
     r_idx = np.floor((up - elev) / (up - down) * rows).astype(np.int64)
     inside = (r_idx >= 0) & (r_idx < rows) & (rng > 0)
     elevation = up - (np.arange(rows) + 0.5) * (up - down) / rows
     pix_in = r_idx[inside] * width + cols[inside]
-    ranges, counts = _nearest_per_pixel(rng[inside].astype(np.float32), pix_in, rows * width)
+    ranges, counts, heights = _nearest_per_pixel(
+        rng[inside].astype(np.float32), z[inside].astype(np.float32), pix_in, rows * width
+    )
     pix = np.full(rng.shape[0], -1, dtype=np.int64)
     pix[inside] = pix_in
     return RangeImage(
@@ -513,4 +529,5 @@ def _project_spherical(
         pix,
         "spherical",
         counts.reshape(rows, width),
+        heights.reshape(rows, width),
     )

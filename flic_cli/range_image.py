@@ -41,6 +41,12 @@ class RangeImage:
     counts : (H, W) int32 array or None
         Number of points that fell into each pixel, when the projection counted them (it does,
         at no extra cost); use :meth:`point_counts`, which counts when this is None.
+    point_z : (H, W) float32 array or None
+        Height (z, metres) of every pixel's nearest point, 0 where empty, when the image was
+        projected from points (the projection keeps it at no extra cost); None for a sensor's
+        own image, whose pixels lie on their row's elevation. A projected pixel's point is not:
+        its row's elevation is a median over the beam (rings) or the middle of a bin
+        (spherical). See :meth:`heights`.
     """
 
     ranges: np.ndarray
@@ -48,6 +54,7 @@ class RangeImage:
     point_pixel: np.ndarray
     projection: str
     counts: np.ndarray | None = field(default=None, repr=False, compare=False)
+    point_z: np.ndarray | None = field(default=None, repr=False, compare=False)
 
     @property
     def shape(self) -> tuple[int, int]:
@@ -83,8 +90,17 @@ class RangeImage:
             pix = pix[pix >= 0]
         return np.bincount(pix, minlength=self.ranges.size).astype(np.int32).reshape(self.shape)
 
-    def heights(self) -> np.ndarray:
-        """(H, W) height of every pixel's point relative to the sensor, in metres (z up)."""
+    def heights(self, exact: bool = True) -> np.ndarray:
+        """(H, W) float32 height of every pixel's point relative to the sensor, in metres (z up);
+        0 where empty.
+
+        Parameters
+        ----------
+        exact : the height of the pixel's nearest point where the image knows it (``point_z``);
+            False, or a sensor's own image: the pixel's range along its row's elevation.
+        """
+        if exact and self.point_z is not None:
+            return self.point_z
         return self.ranges * np.sin(self.elevation).astype(np.float32)[:, None]
 
     def to_points(self) -> np.ndarray:

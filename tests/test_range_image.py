@@ -184,7 +184,29 @@ def assert_same_projection(points, **kwargs):
     counts = np.bincount(has, minlength=ranges.size).reshape(ranges.shape)
     np.testing.assert_array_equal(img.point_counts(), counts)
     assert np.all(counts[ranges > 0] > 0)  # (a pixel of points at range 0 only keeps range 0)
+    assert_nearest_heights(img, points, kwargs.get("keep"))
     return img
+
+
+def assert_nearest_heights(img, points, keep=None):
+    """``point_z`` holds the height of every pixel's nearest point (the first of equally near
+    ones), 0 where empty; checked on the pixels without a point at range 0."""
+    xyz = np.asarray(points[:, :3])
+    if keep is not None:
+        xyz = xyz[keep]
+    pix = img.point_pixel
+    rng = np.sqrt(np.einsum("ij,ij->i", xyz.astype(np.float64), xyz)).astype(np.float32)
+    has = np.flatnonzero(pix >= 0)
+    order = has[np.lexsort((has, rng[has], pix[has]))]  # by pixel, then range, then scan order
+    first = order[np.r_[True, pix[order][1:] != pix[order][:-1]]] if order.size else order
+    zero = np.zeros(img.ranges.size, dtype=bool)
+    zero[pix[has][rng[has] == 0]] = True
+    want = np.zeros(img.ranges.size, dtype=np.float32)
+    want[pix[first]] = xyz[first, 2]
+    got = img.point_z.reshape(-1)
+    check = ~zero
+    np.testing.assert_array_equal(got[check], want[check])
+    assert not got[img.ranges.reshape(-1) == 0][check[img.ranges.reshape(-1) == 0]].any()
 
 
 def test_projection_equals_the_reference_on_every_shared_frame(kitti_root):
