@@ -340,7 +340,8 @@ def test_kernel_equals_the_previous_implementation_on_the_shared_frames(kitti_ro
     ds = open_dataset(kitti_root)
     for ref in ds.refs()[::5]:
         image = prepare(ds.load(ref), "ground", cfg.projection).image
-        assert np.array_equal(column_ground(image, neighbour_px=0, **kw), _reference(image, **kw))
+        got = column_ground(image, neighbour_px=0, point_heights=False, **kw)
+        assert np.array_equal(got, _reference(image, **kw))
 
 
 @settings(max_examples=60, deadline=None)
@@ -435,7 +436,8 @@ def test_step_6_equals_the_plain_reference_on_the_shared_frames(kitti_root, kw):
     ds = open_dataset(kitti_root)
     for ref in ds.refs()[2::5]:
         image = prepare(ds.load(ref), "ground", cfg.projection).image
-        assert np.array_equal(column_ground(image, **_kw6(kw)), _reference_full(image, **kw))
+        got = column_ground(image, point_heights=False, **_kw6(kw))
+        assert np.array_equal(got, _reference_full(image, **kw))
 
 
 @settings(max_examples=60, deadline=None)
@@ -603,3 +605,63 @@ def test_the_clusterers_leave_out_the_points_taken_behind_a_pixel():
     assert flic[n] == 0 and flic[20 + 10] > 0 and flic[n + 1] == flic[20 + 10]
     dbscan = Dbscan(eps_m=3.0, min_samples=1, min_size=1).segment(ground.image, points, mask)
     assert dbscan[n] == 0 and dbscan[20 + 10] > 0
+
+
+# ---- the pixels' geometry on projected scans ---------------------------------------------------
+
+
+def _projected_road(seed: int = 0) -> tuple[RangeImage, np.ndarray]:
+    """A flat road 1.73 m below the sensor, 4-40 m out, as random points projected into 32
+    uniform elevation bins: a point's elevation is anywhere within its bin, so its height is up
+    to half a bin (0.44 deg, 30 cm at 40 m) from the one its row's elevation gives."""
+    from flic_cli.projection import project_points
+
+    rng = np.random.default_rng(seed)
+    n = 200_000
+    rho = np.sqrt(rng.uniform(4.0**2, 40.0**2, n))
+    az = rng.uniform(-np.pi, np.pi, n)
+    pts = np.stack([rho * np.cos(az), rho * np.sin(az), np.full(n, -H_S)], axis=1)
+    pts = pts.astype(np.float32)
+    return project_points(pts, width=512, mode="spherical", rows=32), pts
+
+
+def test_pixels_of_a_projected_scan_lie_at_their_nearest_point():
+    from flic_cli.ground.column import pixel_geometry
+
+    image, pts = _projected_road()
+    rho, z, up_rho, up_z = pixel_geometry(image)
+    # the nearest point of every pixel, by brute force
+    d = np.linalg.norm(pts.astype(np.float64), axis=1)
+    order = np.lexsort((d, image.point_pixel))
+    pix = image.point_pixel[order]
+    first = order[np.r_[True, pix[1:] != pix[:-1]]]
+    first = first[image.point_pixel[first] >= 0]
+    flat = image.point_pixel[first]
+    want_rho = np.zeros(image.ranges.size, np.float32)
+    want_z = np.zeros(image.ranges.size, np.float32)
+    want_rho[flat] = np.hypot(pts[first, 0].astype(np.float64), pts[first, 1])
+    want_z[flat] = pts[first, 2]
+    assert np.allclose(rho.reshape(-1), want_rho, atol=1e-5)
+    assert np.array_equal(z.reshape(-1), want_z)
+    assert np.array_equal(rho > 0, image.ranges > 0)
+    # the next valid cell above
+    r, c = 20, 100
+    above = [k for k in range(r - 1, -1, -1) if rho[k, c] > 0]
+    assert up_rho[r, c] == (rho[above[0], c] if above else 0.0)
+    assert up_z[r, c] == (z[above[0], c] if above else 0.0)
+    # as on a sensor's own image: the row's elevation
+    own = pixel_geometry(image, exact=False)
+    assert np.array_equal(
+        own[1], image.ranges * np.sin(image.elevation).astype(np.float32)[:, None]
+    )
+
+
+def test_a_projected_road_is_ground_at_its_points_heights():
+    image, pts = _projected_road()
+    valid = image.ranges > 0
+    at_points = ColumnGround()(image, pts)
+    at_rows = ColumnGround(point_heights=False)(image, pts)
+    assert np.array_equal(column_ground(image), at_points)
+    assert np.array_equal(column_ground(image, point_heights=False), at_rows)
+    assert at_points[valid].mean() > 0.999
+    assert at_rows[valid].mean() < at_points[valid].mean()

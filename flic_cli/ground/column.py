@@ -113,36 +113,6 @@ _HIDDEN_M = 1e-3  # a point this much farther than its pixel's range is hidden b
 
 
 @njit(cache=True)
-def _seed_window(
-    se: float, ce: float, sensor_height: float, seed_tol: float, tan_seed: float
-) -> tuple[float, float]:
-    """The horizontal ranges (lo, hi) of one row (``z = rho se / ce``) within which the seed test
-    ``|z + sensor_height| <= seed_tol + tan_seed rho`` can hold, widened by 1 % and 1 cm so that
-    float rounding never leaves out a cell the exact test takes: cells outside are no seeds
-    without the test (most cells of columns that have no ground yet)."""
-    t = np.float64(se) / np.float64(ce)
-    lo = 0.0
-    hi = np.inf
-    a = t - tan_seed  # (t - k) rho <= s - h
-    b = seed_tol - sensor_height
-    if a > 0.0:
-        hi = min(hi, b / a)
-    elif a < 0.0:
-        lo = max(lo, b / a)
-    elif b < 0.0:
-        return 1.0, 0.0
-    a = t + tan_seed  # (t + k) rho >= -s - h
-    b = -seed_tol - sensor_height
-    if a > 0.0:
-        lo = max(lo, b / a)
-    elif a < 0.0:
-        hi = min(hi, b / a)
-    elif b > 0.0:
-        return 1.0, 0.0
-    return lo * 0.99 - 0.01, hi * 1.01 + 0.01
-
-
-@njit(cache=True)
 def _geometry(
     ranges: np.ndarray,
     sin_el: np.ndarray,
@@ -152,9 +122,10 @@ def _geometry(
     up_rho: np.ndarray,
     up_z: np.ndarray,
 ) -> None:
-    """Horizontal range ``rho`` and height ``z`` of every pixel (0, 0 where empty), and
-    ``up_rho``, ``up_z``: those of the next valid cell above it in its column (0, 0: none).
-    Row by row from the top, branch-free, so that every row runs as vector code."""
+    """Horizontal range ``rho`` and height ``z`` of every pixel from its range and its row's
+    elevation (0, 0 where empty), and ``up_rho``, ``up_z``: those of the next valid cell above
+    it in its column (0, 0: none). Row by row from the top, branch-free, so that every row runs
+    as vector code."""
     h, w = ranges.shape
     cur_rho = np.zeros(w, dtype=np.float32)  # the last valid cell of the rows so far
     cur_z = np.zeros(w, dtype=np.float32)
@@ -176,6 +147,38 @@ def _geometry(
 
 
 @njit(cache=True)
+def _exact_geometry(
+    ranges: np.ndarray,
+    point_z: np.ndarray,
+    rho: np.ndarray,
+    z: np.ndarray,
+    up_rho: np.ndarray,
+    up_z: np.ndarray,
+) -> None:
+    """:func:`_geometry` of a projected scan, whose pixels know their nearest point's height
+    ``point_z`` (0 where empty): ``z`` is that height and ``rho = sqrt(range^2 - z^2)``.
+    Branch-free, as :func:`_geometry`."""
+    h, w = ranges.shape
+    cur_rho = np.zeros(w, dtype=np.float32)
+    cur_z = np.zeros(w, dtype=np.float32)
+    zero = np.float32(0.0)
+    for r in range(h):
+        for c in range(w):
+            d = ranges[r, c]
+            zv = point_z[r, c]
+            rv = np.sqrt(max(d * d - zv * zv, zero))
+            rho[r, c] = rv
+            z[r, c] = zv
+            cr = cur_rho[c]
+            cz = cur_z[c]
+            up_rho[r, c] = cr
+            up_z[r, c] = cz
+            valid = rv > zero
+            cur_rho[c] = rv if valid else cr
+            cur_z[c] = zv if valid else cz
+
+
+@njit(cache=True)
 def _columns_row(
     rho_row: np.ndarray,
     z_row: np.ndarray,
@@ -187,8 +190,6 @@ def _columns_row(
     last: np.ndarray,
     taken: np.ndarray,
     ask: np.ndarray,
-    seed_lo: float,
-    seed_hi: float,
     p: np.ndarray,
 ) -> None:
     """Steps 1, 2 and 5 for every cell of one row, and which cells need the cells above for
@@ -233,7 +234,7 @@ def _columns_row(
         step = live & ~cont & (e >= -(step_k + 3.0 * tan_gap * dr)) & (e <= lim)  # 3.
         es = z + sensor_height
         slim = seed_tol + tan_seed * rho
-        seed = valid & ~has & (rho >= seed_lo) & (rho <= seed_hi) & (es >= -slim) & (es <= slim)
+        seed = valid & ~has & (es >= -slim) & (es <= slim)
         base = live & (~cont | stood_on) & ~step & (dr < _BASE_DR_M)  # 5.
         base &= (e >= -base_band) & (e <= base_band)
         m = gm + _GAIN_GRADIENT * e / max(dr, _GAIN_BASE_M)
@@ -248,10 +249,16 @@ def _columns_row(
 
 @njit(cache=True)
 def _column_ground(
-    ranges: np.ndarray, sin_el: np.ndarray, cos_el: np.ndarray, p: np.ndarray
+    rho_img: np.ndarray,
+    z_img: np.ndarray,
+    up_rho: np.ndarray,
+    up_z: np.ndarray,
+    p: np.ndarray,
 ) -> np.ndarray:
-    """The remover on one image; ``sin_el``, ``cos_el`` are float32 per row, ``p`` holds the
-    parameters in the ``_P_*`` layout.
+    """The remover on one image given its geometry (:func:`_geometry` or
+    :func:`_point_geometry`): horizontal range and height of every pixel and of the next valid
+    cell above it, the bounds of ``z / rho`` per row; ``p`` holds the parameters in the ``_P_*``
+    layout.
 
     Every row, from the bottom, in three passes: steps 1, 2 and 5 for every column in vector
     code (:func:`_columns_row`); then the cells that step 3 or 4 asks about, one by one (the set
@@ -268,19 +275,11 @@ def _column_ground(
     tan_change = p[_P_TAN_CHANGE]
     base_band = p[_P_BASE_BAND]
     tan_flat = p[_P_TAN_FLAT]
-    seed_tol = p[_P_SEED_TOL]
     nb_px = int(p[_P_NB_PX])
     nb_band = p[_P_NB_BAND]
     tan_foot = p[_P_TAN_FOOT]
     under = p[_P_UNDER]
-    tan_seed = np.tan(np.radians(_SEED_SLOPE_DEG))
-    h, w = ranges.shape
-    # horizontal range and height of every pixel and of the next valid cell above it
-    rho_img = np.empty((h, w), dtype=np.float32)
-    z_img = np.empty((h, w), dtype=np.float32)
-    up_rho = np.empty((h, w), dtype=np.float32)
-    up_z = np.empty((h, w), dtype=np.float32)
-    _geometry(ranges, sin_el, cos_el, rho_img, z_img, up_rho, up_z)
+    h, w = rho_img.shape
     out = np.zeros((h, w), dtype=np.bool_)
     g_rho = np.full(w, -1.0)  # last ground point of the column (-1: none yet)
     g_z = np.zeros(w)
@@ -294,12 +293,11 @@ def _column_ground(
     ask_w = np.zeros(nw, dtype=np.uint64)
     flips = np.empty(w + 2, dtype=np.int64)  # columns where the row flips taken / not taken
     for r in range(h - 1, -1, -1):
-        seed_lo, seed_hi = _seed_window(sin_el[r], cos_el[r], sensor_height, seed_tol, tan_seed)
         rrow = rho_img[r]
         zrow = z_img[r]
         orow = out[r]
         _columns_row(rrow, zrow, up_rho[r], up_z[r], g_rho, g_z, g_m, last, taken, ask,
-                     seed_lo, seed_hi, p)  # fmt: skip
+                     p)  # fmt: skip
         pack(ask, ask_w)
         for k in range(nw):
             bits = ask_w[k]
@@ -443,8 +441,8 @@ def _column_ground(
 @njit(cache=True)
 def _points_ground(
     ranges: np.ndarray,
-    sin_el: np.ndarray,
-    cos_el: np.ndarray,
+    rho_img: np.ndarray,
+    z_img: np.ndarray,
     mask: np.ndarray,
     point_pixel: np.ndarray,
     xyz: np.ndarray,
@@ -473,12 +471,12 @@ def _points_ground(
         r = p // w
         c = p % w
         rho = np.sqrt(x * x + y * y)
-        ce = np.float64(cos_el[r])
-        se = np.float64(sin_el[r])
         for cc in range(max(c - reach, 0), min(c + reach + 1, w)):
             if mask[r, cc]:
-                d = np.float64(ranges[r, cc])
-                if abs(d * ce - rho) <= _ROW_DRHO_M and abs(d * se - z) <= band:
+                if (
+                    abs(np.float64(rho_img[r, cc]) - rho) <= _ROW_DRHO_M
+                    and abs(np.float64(z_img[r, cc]) - z) <= band
+                ):
                     out[i] = True
                     break
     return out
@@ -488,6 +486,35 @@ def _points_ground(
 def _row_trig(el: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Sine and cosine of every row as float32 (the precision of the ranges they multiply)."""
     return np.sin(el).astype(np.float32), np.cos(el).astype(np.float32)
+
+
+def pixel_geometry(image: RangeImage, exact: bool = True) -> tuple[np.ndarray, ...]:
+    """The geometry the remover works on: ``rho``, ``z`` (H, W) float32, the horizontal range
+    and height of every pixel, metres (0 where empty); ``up_rho``, ``up_z``, those of the next
+    valid cell above it (0: none).
+
+    A projected scan (``exact`` and ``image.point_z`` known) gives every pixel the height of its
+    nearest point: its row's elevation is only the median of its beam's, and the beams of a real
+    sensor do not share one origin (on the shared SemanticKITTI frames a ground pixel's height
+    along its row's elevation is off by more than 3 cm for half of them and by up to 10-23 cm;
+    ``results/ground/README.md``), more than the remover's bands of 3-8 cm. A sensor's own
+    image, or ``exact`` False: every pixel's range along its row's elevation.
+    """
+    h, w = image.shape
+    rho = np.empty((h, w), dtype=np.float32)
+    z = np.empty((h, w), dtype=np.float32)
+    up_rho = np.empty((h, w), dtype=np.float32)
+    up_z = np.empty((h, w), dtype=np.float32)
+    ranges = image.ranges
+    if ranges.dtype != np.float32 or not ranges.flags.c_contiguous:
+        ranges = np.ascontiguousarray(ranges, dtype=np.float32)
+    if not exact or image.point_z is None:
+        sin_el, cos_el = _row_trig(image.elevation)
+        _geometry(ranges, sin_el, cos_el, rho, z, up_rho, up_z)
+        return rho, z, up_rho, up_z
+    point_z = np.ascontiguousarray(image.point_z, dtype=np.float32)
+    _exact_geometry(ranges, point_z, rho, z, up_rho, up_z)
+    return rho, z, up_rho, up_z
 
 
 @functools.lru_cache(maxsize=64)
@@ -543,6 +570,9 @@ class ColumnGround:
     under_m : ground under a nearer occluder up to this far behind it is kept, metres.
     hidden_points : step 7, the points hidden behind their pixel's nearest point decided one by
         one (projected scans; a sensor's own image has none).
+    point_heights : on projected scans, every pixel at its nearest point's height (False: at its
+        range along its row's elevation, as on a sensor's own image; see
+        :func:`pixel_geometry`).
     """
 
     sensor_height_m: Annotated[float, Field(gt=0, description="metres")] = 1.73
@@ -558,6 +588,7 @@ class ColumnGround:
     foot_deg: Annotated[float, Field(gt=0, lt=90, description="degrees")] = 30.0
     under_m: Annotated[float, Field(ge=0, description="metres")] = 2.0
     hidden_points: bool = True
+    point_heights: bool = True
 
     def __call__(self, image: RangeImage, points: np.ndarray | None = None) -> np.ndarray:
         """(H, W) bool ground mask of ``image`` (see :func:`column_ground`)."""
@@ -575,6 +606,7 @@ class ColumnGround:
             self.neighbour_band_m,
             self.foot_deg,
             self.under_m,
+            self.point_heights,
         )
 
     def point_ground(
@@ -586,11 +618,11 @@ class ColumnGround:
         image, which has no hidden points."""
         if not self.hidden_points or image.projection == "native":
             return None
-        sin_el, cos_el = _row_trig(image.elevation)
+        rho, z = pixel_geometry(image, self.point_heights)[:2]
         return _points_ground(
             np.ascontiguousarray(image.ranges, dtype=np.float32),
-            sin_el,
-            cos_el,
+            rho,
+            z,
             np.ascontiguousarray(mask, dtype=np.bool_),
             np.ascontiguousarray(image.point_pixel, dtype=np.int64),
             np.ascontiguousarray(points),
@@ -613,6 +645,7 @@ def column_ground(
     neighbour_band_m: float = ColumnGround.neighbour_band_m,
     foot_deg: float = ColumnGround.foot_deg,
     under_m: float = ColumnGround.under_m,
+    point_heights: bool = ColumnGround.point_heights,
 ) -> np.ndarray:
     """Ground pixels by column-wise ground tracking (see the module docstring).
 
@@ -636,15 +669,15 @@ def column_ground(
         something standing on it and stays, degrees.
     under_m : a cell whose next cell above is nearer by 0.3 m to this is ground under a car's
         body (labelled as the car) and stays, metres.
+    point_heights : on a projected scan, every pixel at its nearest point's height rather than
+        at its range along its row's elevation (:func:`pixel_geometry`); a sensor's own image
+        has only the latter.
 
     Returns
     -------
     (H, W) bool, True = ground. Empty pixels are never ground.
     """
-    sin_el, cos_el = _row_trig(image.elevation)
-    ranges = image.ranges
-    if ranges.dtype != np.float32 or not ranges.flags.c_contiguous:
-        ranges = np.ascontiguousarray(ranges, dtype=np.float32)
+    geometry = pixel_geometry(image, point_heights)
     params = _param_vector(
         float(sensor_height_m),
         float(noise_m),
@@ -659,4 +692,4 @@ def column_ground(
         float(foot_deg),
         float(under_m),
     )
-    return _column_ground(ranges, sin_el, cos_el, params)
+    return _column_ground(*geometry, params)
