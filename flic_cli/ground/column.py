@@ -13,7 +13,10 @@ The algorithm
 The image is swept row by row from the bottom (nearest) row up; every column keeps its own ground
 model: the last ground point ``(rho_g, z_g)`` (horizontal range and height, metres) and the local
 gradient ``m`` (rise per metre). For a valid cell at ``(rho, z)`` with ``dr = rho - rho_g`` the
-residual is ``e = z - (z_g + m dr)``.
+residual is ``e = z - (z_g + m dr)``. A cell's ``(rho, z)`` is that of its pixel's nearest point
+on a projected scan (:func:`pixel_geometry`: a row's elevation is only its beam's median, off by
+several centimetres, as much as the bands below), its range along its row's elevation on a
+sensor's own image.
 
 1. **Behind.** A cell nearer than the last ground point (``dr < -5 cm``) stands in front of it:
    an object, never ground.
