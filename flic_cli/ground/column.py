@@ -499,9 +499,9 @@ def pixel_geometry(image: RangeImage, exact: bool = True) -> tuple[np.ndarray, .
     A projected scan (``exact`` and ``image.point_z`` known) gives every pixel the height of its
     nearest point: its row's elevation is only the median of its beam's, and the beams of a real
     sensor do not share one origin (on the shared SemanticKITTI frames a ground pixel's height
-    along its row's elevation is off by more than 3 cm for half of them and by up to 10-23 cm;
-    ``results/ground/README.md``), more than the remover's bands of 3-8 cm. A sensor's own
-    image, or ``exact`` False: every pixel's range along its row's elevation.
+    along its row's elevation is off by more than 3 cm for half of them, 1st-99th percentile
+    -21..+12 cm; ``scripts/pixel_heights.py``), as much as the remover's bands of 3-8 cm. A
+    sensor's own image, or ``exact`` False: every pixel's range along its row's elevation.
     """
     h, w = image.shape
     rho = np.empty((h, w), dtype=np.float32)
