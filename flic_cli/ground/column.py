@@ -258,10 +258,9 @@ def _column_ground(
     up_z: np.ndarray,
     p: np.ndarray,
 ) -> np.ndarray:
-    """The remover on one image given its geometry (:func:`_geometry` or
-    :func:`_point_geometry`): horizontal range and height of every pixel and of the next valid
-    cell above it, the bounds of ``z / rho`` per row; ``p`` holds the parameters in the ``_P_*``
-    layout.
+    """The remover on one image given its geometry (:func:`pixel_geometry`): horizontal range
+    and height of every pixel and of the next valid cell above it; ``p`` holds the parameters in
+    the ``_P_*`` layout.
 
     Every row, from the bottom, in three passes: steps 1, 2 and 5 for every column in vector
     code (:func:`_columns_row`); then the cells that step 3 or 4 asks about, one by one (the set
@@ -299,8 +298,7 @@ def _column_ground(
         rrow = rho_img[r]
         zrow = z_img[r]
         orow = out[r]
-        _columns_row(rrow, zrow, up_rho[r], up_z[r], g_rho, g_z, g_m, last, taken, ask,
-                     p)  # fmt: skip
+        _columns_row(rrow, zrow, up_rho[r], up_z[r], g_rho, g_z, g_m, last, taken, ask, p)
         pack(ask, ask_w)
         for k in range(nw):
             bits = ask_w[k]
