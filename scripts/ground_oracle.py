@@ -1,11 +1,14 @@
 """How close a per-pixel ground remover can get: the clusterers' IoU_mu gaps with masks taken
 from the labels, and with the labels' decision withheld where geometry cannot know it.
 
-Every pixel gets a category from the next valid cell above it (within 3 rows): ``under`` (that
+Every pixel (at its nearest point's height, as ``column`` sees it) gets a category from the next
+valid cell above it (within 3 rows): ``under`` (that
 cell is nearer by more than 0.3 m: an occluder), ``foot`` (it rises from the pixel more steeply
 than 30 deg), else ``free`` (farther, flat, or nothing above); ``-thing`` when the point owning
 that cell is a thing object's (a label, which a remover does not have). Masks:
 
+- ``labels, per point``: every point of a ground class is ground, whatever its pixel (the points
+  taken outside ground pixels leave their pixel, as step 7's do: a perfect per-point remover);
 - ``labels``: a pixel is ground when the point that owns it (the nearest) is of a ground class;
 - ``labels - thing feet``: the same, but ground pixels under or at the foot of a thing object
   left (what a remover that keeps every object's foot does);
@@ -35,11 +38,12 @@ from numba import njit
 
 from flic_cli.classes import GROUND_LUT, THING_LUT
 from flic_cli.config import load_config
-from flic_cli.ground.base import pixel_owners
+from flic_cli.ground.base import Ground, extract_ground, pixel_owners
+from flic_cli.ground.column import pixel_geometry
 from flic_cli.io import open_dataset
 from flic_cli.io.atomic import atomic_write
 from flic_cli.metrics import match_objects
-from flic_cli.metrics.ground import GroundCounts, ground_counts, ground_scores, point_ground
+from flic_cli.metrics.ground import GroundCounts, ground_counts, ground_scores
 from flic_cli.runs.pipeline import prepare
 
 CATEGORIES = ("free", "under", "foot", "free-thing", "under-thing", "foot-thing")
@@ -92,6 +96,20 @@ def row_height(rho: np.ndarray, z: np.ndarray, taken: np.ndarray) -> np.ndarray:
     return out
 
 
+class _Decided:
+    """A remover that returns a given pixel mask and per-point decision (for
+    :func:`extract_ground`)."""
+
+    def __init__(self, mask: np.ndarray, on_ground: np.ndarray) -> None:
+        self.mask, self.on_ground = mask, on_ground
+
+    def __call__(self, image: object, points: object) -> np.ndarray:
+        return self.mask
+
+    def point_ground(self, image: object, points: object, mask: object) -> np.ndarray:
+        return self.on_ground
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("data", type=Path)
@@ -105,9 +123,9 @@ def main() -> None:
     methods = {m: cfg.method(m).method for m in args.methods.split(",")}
     column = cfg.remover("column")
     ds = open_dataset(args.data)
-    masks: dict[str, list] = {k: [] for k in ("labels", "labels - thing feet",
-                                              "labels - other feet", "column",
-                                              "column + labels at thing feet")}  # fmt: skip
+    grounds: dict[str, list[Ground]] = {k: [] for k in (
+        "labels, per point", "labels", "labels - thing feet", "labels - other feet", "column",
+        "column + labels at thing feet")}  # fmt: skip
     pairs = []
     counts = np.zeros((len(CATEGORIES), 3), dtype=np.int64)
     for ref in ds.refs():
@@ -121,18 +139,21 @@ def main() -> None:
         sem = lab & 0xFFFF
         thing = THING_LUT[sem] & ((lab >> 16) > 0) & (owner >= 0)
         gr = GROUND_LUT[sem] & (owner >= 0)
-        el = np.asarray(img.elevation, dtype=np.float64)[:, None]
-        rho = img.ranges * np.cos(el)
-        z = img.ranges * np.sin(el)
+        rho, z = pixel_geometry(img)[:2]
         cat = categories(rho, z, thing)
         thing_feet = (cat == 4) | (cat == 5)
         other_feet = (cat == 1) | (cat == 2)
         col = column(img)
-        masks["labels"].append(gr)
-        masks["labels - thing feet"].append(gr & ~thing_feet)
-        masks["labels - other feet"].append(gr & ~other_feet)
-        masks["column"].append(col)
-        masks["column + labels at thing feet"].append(np.where(thing_feet, gr, col))
+        on_ground = GROUND_LUT[g.labels & 0xFFFF]
+        grounds["labels, per point"].append(extract_ground(_Decided(gr, on_ground), img, g.points))
+        for name, mask in (
+            ("labels", gr),
+            ("labels - thing feet", gr & ~thing_feet),
+            ("labels - other feet", gr & ~other_feet),
+            ("column", col),
+            ("column + labels at thing feet", np.where(thing_feet, gr, col)),
+        ):
+            grounds[name].append(Ground(mask, img))
         if args.counts:
             hh = row_height(rho, z, col)
             near = (img.ranges > 0) & ~col & (np.abs(np.nan_to_num(hh, nan=9.0)) <= args.band)
@@ -140,25 +161,27 @@ def main() -> None:
                 s = near & (cat == k)
                 counts[k] += [(s & gr).sum(), (s & thing).sum(), (s & ~gr & ~thing).sum()]
 
-    def iou(use_masks):
+    def iou(use: list[Ground] | None) -> dict[str, float]:
         res = {}
         for name, method in methods.items():
             ious = []
             for k, (g, n) in enumerate(pairs):
-                prep = n if use_masks is None else g
-                m = None if use_masks is None else use_masks[k]
-                labels = method.segment(prep.image, prep.points, m)
-                ious.append(match_objects(prep.labels, labels).iou)
+                if use is None:
+                    labels = method.segment(n.image, n.points, None)
+                    ious.append(match_objects(n.labels, labels).iou)
+                else:
+                    labels = method.segment(use[k].image, g.points, use[k].mask)
+                    ious.append(match_objects(g.labels, labels).iou)
             res[name] = 100 * float(np.mean(np.concatenate(ious)))
         return res
 
     reference = iou(None)
     rows = []
-    for name, ms in masks.items():
-        c = sum((ground_counts(g.labels, point_ground(g.image, m)) for (g, _), m in
-                 zip(pairs, ms, strict=True)), GroundCounts())  # fmt: skip
+    for name, gs in grounds.items():
+        c = sum((ground_counts(g.labels, ground.on_ground) for (g, _), ground in
+                 zip(pairs, gs, strict=True)), GroundCounts())  # fmt: skip
         row = {"mask": name, **{k: round(v, 2) for k, v in ground_scores(c).items()}}
-        got = iou(ms)
+        got = iou(gs)
         for m in methods:
             row[f"iou_{m}"] = round(got[m], 2)
             row[f"gap_{m}"] = round(reference[m] - got[m], 2)
