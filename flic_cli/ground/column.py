@@ -77,6 +77,7 @@ shared SemanticKITTI frames and the synthetic sample (``scripts/ground_sweep.py`
 from __future__ import annotations
 
 import functools
+from collections.abc import Callable
 from typing import Annotated
 
 import numpy as np
@@ -115,70 +116,56 @@ _HIDDEN_M = 1e-3  # a point this much farther than its pixel's range is hidden b
  _P_BASE_BAND, _P_NB_PX, _P_NB_BAND, _P_TAN_FOOT, _P_UNDER, _P_LEN) = range(13)  # fmt: skip
 
 
-@njit(cache=True)
-def _geometry(
-    ranges: np.ndarray,
-    sin_el: np.ndarray,
-    cos_el: np.ndarray,
-    rho: np.ndarray,
-    z: np.ndarray,
-    up_rho: np.ndarray,
-    up_z: np.ndarray,
-) -> None:
-    """Horizontal range ``rho`` and height ``z`` of every pixel from its range and its row's
-    elevation (0, 0 where empty), and ``up_rho``, ``up_z``: those of the next valid cell above
-    it in its column (0, 0: none). Row by row from the top, branch-free, so that every row runs
-    as vector code."""
-    h, w = ranges.shape
-    cur_rho = np.zeros(w, dtype=np.float32)  # the last valid cell of the rows so far
-    cur_z = np.zeros(w, dtype=np.float32)
-    for r in range(h):
-        se = sin_el[r]
-        ce = cos_el[r]
-        for c in range(w):
-            rv = ranges[r, c] * ce
-            zv = ranges[r, c] * se
-            rho[r, c] = rv
-            z[r, c] = zv
-            cr = cur_rho[c]
-            cz = cur_z[c]
-            up_rho[r, c] = cr
-            up_z[r, c] = cz
-            valid = rv > 0.0
-            cur_rho[c] = rv if valid else cr
-            cur_z[c] = zv if valid else cz
+@njit(inline="always")
+def _cell(d: float, pz: float, se: float, ce: float, exact: bool) -> tuple[float, float]:
+    """Horizontal range and height of a cell at range ``d`` (float32): from its nearest point's
+    height ``pz`` when ``exact``, else along its row's elevation (sine ``se``, cosine ``ce``)."""
+    if exact:
+        return np.sqrt(max(d * d - pz * pz, np.float32(0.0))), pz
+    return d * ce, d * se
 
 
-@njit(cache=True)
-def _exact_geometry(
-    ranges: np.ndarray,
-    point_z: np.ndarray,
-    rho: np.ndarray,
-    z: np.ndarray,
-    up_rho: np.ndarray,
-    up_z: np.ndarray,
-) -> None:
-    """:func:`_geometry` of a projected scan, whose pixels know their nearest point's height
-    ``point_z`` (0 where empty): ``z`` is that height and ``rho = sqrt(range^2 - z^2)``.
-    Branch-free, as :func:`_geometry`."""
-    h, w = ranges.shape
-    cur_rho = np.zeros(w, dtype=np.float32)
-    cur_z = np.zeros(w, dtype=np.float32)
-    zero = np.float32(0.0)
-    for r in range(h):
-        for c in range(w):
-            d = ranges[r, c]
-            zv = point_z[r, c]
-            rv = np.sqrt(max(d * d - zv * zv, zero))
-            rho[r, c] = rv
-            z[r, c] = zv
-            cr = cur_rho[c]
-            cz = cur_z[c]
-            up_rho[r, c] = cr
-            up_z[r, c] = cz
-            valid = rv > zero
-            cur_rho[c] = rv if valid else cr
-            cur_z[c] = zv if valid else cz
+def _geometry_kernel(exact: bool) -> Callable[..., None]:
+    """The kernel that fills ``rho``, ``z`` of every pixel (:func:`_cell`; 0, 0 where empty)
+    and ``up_rho``, ``up_z``, those of the next valid cell above it in its column (0, 0: none),
+    row by row from the top, branch-free, so that every row runs as vector code. ``exact`` is
+    fixed when the kernel is compiled (one kernel each way), so that no branch on it is left in
+    the loop."""
+
+    @njit(cache=True)
+    def geometry(
+        ranges: np.ndarray,
+        point_z: np.ndarray,
+        sin_el: np.ndarray,
+        cos_el: np.ndarray,
+        rho: np.ndarray,
+        z: np.ndarray,
+        up_rho: np.ndarray,
+        up_z: np.ndarray,
+    ) -> None:
+        h, w = ranges.shape
+        cur_rho = np.zeros(w, dtype=np.float32)  # the last valid cell of the rows so far
+        cur_z = np.zeros(w, dtype=np.float32)
+        for r in range(h):
+            se = sin_el[r]
+            ce = cos_el[r]
+            for c in range(w):
+                rv, zv = _cell(ranges[r, c], point_z[r, c], se, ce, exact)
+                rho[r, c] = rv
+                z[r, c] = zv
+                cr = cur_rho[c]
+                cz = cur_z[c]
+                up_rho[r, c] = cr
+                up_z[r, c] = cz
+                valid = rv > 0.0
+                cur_rho[c] = rv if valid else cr
+                cur_z[c] = zv if valid else cz
+
+    return geometry
+
+
+#: :func:`_geometry_kernel` along the rows' elevation (False) and at the points' heights (True).
+_GEOMETRY = {exact: _geometry_kernel(exact) for exact in (False, True)}
 
 
 @njit(cache=True)
@@ -442,8 +429,10 @@ def _column_ground(
 @njit(cache=True)
 def _points_ground(
     ranges: np.ndarray,
-    rho_img: np.ndarray,
-    z_img: np.ndarray,
+    point_z: np.ndarray,
+    sin_el: np.ndarray,
+    cos_el: np.ndarray,
+    exact: bool,
     mask: np.ndarray,
     point_pixel: np.ndarray,
     xyz: np.ndarray,
@@ -472,12 +461,12 @@ def _points_ground(
         r = p // w
         c = p % w
         rho = np.sqrt(x * x + y * y)
+        se = sin_el[r]
+        ce = cos_el[r]
         for cc in range(max(c - reach, 0), min(c + reach + 1, w)):
             if mask[r, cc]:
-                if (
-                    abs(np.float64(rho_img[r, cc]) - rho) <= _ROW_DRHO_M
-                    and abs(np.float64(z_img[r, cc]) - z) <= band
-                ):
+                rv, zv = _cell(ranges[r, cc], point_z[r, cc], se, ce, exact)
+                if abs(np.float64(rv) - rho) <= _ROW_DRHO_M and abs(np.float64(zv) - z) <= band:
                     out[i] = True
                     break
     return out
@@ -502,20 +491,22 @@ def pixel_geometry(image: RangeImage, exact: bool = True) -> tuple[np.ndarray, .
     sensor's own image, or ``exact`` False: every pixel's range along its row's elevation.
     """
     h, w = image.shape
-    rho = np.empty((h, w), dtype=np.float32)
-    z = np.empty((h, w), dtype=np.float32)
-    up_rho = np.empty((h, w), dtype=np.float32)
-    up_z = np.empty((h, w), dtype=np.float32)
+    out = tuple(np.empty((h, w), dtype=np.float32) for _ in range(4))
+    ranges, point_z, sin_el, cos_el, exact = _cell_inputs(image, exact)
+    _GEOMETRY[exact](ranges, point_z, sin_el, cos_el, *out)
+    return out
+
+
+def _cell_inputs(image: RangeImage, exact: bool) -> tuple:
+    """``ranges, point_z, sin_el, cos_el, exact`` as :func:`_cell` reads them (``point_z`` is
+    the ranges themselves, unread, where the rows' elevation is used)."""
     ranges = image.ranges
     if ranges.dtype != np.float32 or not ranges.flags.c_contiguous:
         ranges = np.ascontiguousarray(ranges, dtype=np.float32)
-    if not exact or image.point_z is None:
-        sin_el, cos_el = _row_trig(image.elevation)
-        _geometry(ranges, sin_el, cos_el, rho, z, up_rho, up_z)
-        return rho, z, up_rho, up_z
-    point_z = np.ascontiguousarray(image.point_z, dtype=np.float32)
-    _exact_geometry(ranges, point_z, rho, z, up_rho, up_z)
-    return rho, z, up_rho, up_z
+    sin_el, cos_el = _row_trig(image.elevation)
+    exact = bool(exact) and image.point_z is not None
+    point_z = np.ascontiguousarray(image.point_z, dtype=np.float32) if exact else ranges
+    return ranges, point_z, sin_el, cos_el, exact
 
 
 @functools.lru_cache(maxsize=64)
@@ -619,11 +610,8 @@ class ColumnGround:
         image, which has no hidden points."""
         if not self.hidden_points or image.projection == "native":
             return None
-        rho, z = pixel_geometry(image, self.point_heights)[:2]
         return _points_ground(
-            np.ascontiguousarray(image.ranges, dtype=np.float32),
-            rho,
-            z,
+            *_cell_inputs(image, self.point_heights),
             np.ascontiguousarray(mask, dtype=np.bool_),
             np.ascontiguousarray(image.point_pixel, dtype=np.int64),
             np.ascontiguousarray(points),
