@@ -90,16 +90,11 @@ class RangeImage:
             pix = pix[pix >= 0]
         return np.bincount(pix, minlength=self.ranges.size).astype(np.int32).reshape(self.shape)
 
-    def heights(self, exact: bool = True) -> np.ndarray:
+    def heights(self) -> np.ndarray:
         """(H, W) float32 height of every pixel's point relative to the sensor, in metres (z up);
-        0 where empty.
-
-        Parameters
-        ----------
-        exact : the height of the pixel's nearest point where the image knows it (``point_z``);
-            False, or a sensor's own image: the pixel's range along its row's elevation.
-        """
-        if exact and self.point_z is not None:
+        0 where empty: ``point_z`` where the image knows it (projected scans), else the pixel's
+        range along its row's elevation."""
+        if self.point_z is not None:
             return self.point_z
         return self.ranges * np.sin(self.elevation).astype(np.float32)[:, None]
 

@@ -37,7 +37,7 @@ from tqdm import tqdm
 from flic_cli.classes import ground_mask, thing_mask
 from flic_cli.config import load_config
 from flic_cli.io import open_dataset
-from flic_cli.io.atomic import atomic_write
+from flic_cli.io.atomic import write_table
 from flic_cli.runs.pipeline import build_segmenter, prepare
 
 MIN_POINTS = 100
@@ -132,8 +132,7 @@ def main() -> None:
                 }
             )
     objs = pd.DataFrame(objects)
-    with atomic_write(f"{args.out}_objects.csv") as tmp:
-        objs.to_csv(tmp, index=False)
+    write_table(f"{args.out}_objects.csv", objs)
     print(
         f"{args.method} with the {args.remover} remover: IoU with the majority cluster "
         f"{100 * objs.iou.mean():.2f}, {100 * objs.iou_without_ground.mean():.2f} without the "
@@ -143,8 +142,7 @@ def main() -> None:
         "taken as ground"
     )
     table = pd.DataFrame(rows)
-    with atomic_write(f"{args.out}_pairs.csv") as tmp:
-        table.to_csv(tmp, index=False)
+    write_table(f"{args.out}_pairs.csv", table)
     n = len(table)
     if n:
         sep = int(table.separate_without_them.sum())

@@ -41,7 +41,7 @@ from flic_cli.config import load_config
 from flic_cli.ground.base import Ground, extract_ground, pixel_owners
 from flic_cli.ground.column import pixel_geometry
 from flic_cli.io import open_dataset
-from flic_cli.io.atomic import atomic_write
+from flic_cli.io.atomic import write_table
 from flic_cli.metrics import match_objects
 from flic_cli.metrics.ground import GroundCounts, ground_counts, ground_scores
 from flic_cli.runs.pipeline import prepare
@@ -189,15 +189,14 @@ def main() -> None:
     df = pd.DataFrame(rows)
     print(df.to_string(index=False))
     if args.out is not None:
-        with atomic_write(args.out) as tmp:
-            df.to_csv(tmp, index=False)
+        write_table(args.out, df)
     if args.counts:
         print(f"\npixels the remover leaves within {args.band} m of the row's taken ground:")
         cdf = pd.DataFrame(counts, index=CATEGORIES, columns=["ground", "thing", "other"])
         print(cdf.to_string())
         if args.out is not None:
-            with atomic_write(args.out.with_name(args.out.stem + "_counts.csv")) as tmp:
-                cdf.to_csv(tmp, index_label="category")
+            counts_out = args.out.with_name(args.out.stem + "_counts.csv")
+            write_table(counts_out, cdf.rename_axis("category").reset_index())
 
 
 if __name__ == "__main__":

@@ -32,7 +32,7 @@ from flic_cli.config import load_config
 from flic_cli.ground import ColumnGround
 from flic_cli.ground.base import Ground, extract_ground
 from flic_cli.io import open_dataset
-from flic_cli.io.atomic import atomic_write
+from flic_cli.io.atomic import write_table
 from flic_cli.metrics import match_objects
 from flic_cli.metrics.ground import GroundCounts, ground_counts, ground_scores
 from flic_cli.runs.pipeline import prepare
@@ -123,9 +123,7 @@ def main() -> None:
                 rows.append(row)
                 print(row, flush=True)
     df = pd.DataFrame(rows)
-    args.out.parent.mkdir(parents=True, exist_ok=True)
-    with atomic_write(args.out) as tmp_out:
-        df.to_csv(tmp_out, index=False)
+    write_table(args.out, df)
     print(df.to_string(index=False))
 
 

@@ -2,7 +2,8 @@
 
 A projected range image gives every row one elevation (rings: the median of the beam's points;
 spherical: the middle of the bin). A pixel's height "along its row" is ``range * sin(elevation)``;
-its true height is that of its nearest point (``RangeImage.point_z``). For every pixel of the
+its true height is that of its nearest point (``RangeImage.point_z``); both as ``column`` sees
+them (:func:`flic_cli.ground.column.pixel_geometry`). For every pixel of the
 ground setting's image (all points projected) this prints, over all frames, the percentiles of
 the difference (true minus row height) and the shares beyond 3 and 8 cm (the ``column``
 remover's bands are 3-8 cm), for all valid pixels and for those whose nearest point has a
@@ -26,6 +27,7 @@ from tqdm import tqdm
 from flic_cli.classes import ground_mask
 from flic_cli.config import load_config
 from flic_cli.ground.base import pixel_owners
+from flic_cli.ground.column import pixel_geometry
 from flic_cli.io import open_dataset
 from flic_cli.io.atomic import write_table
 from flic_cli.runs.pipeline import prepare
@@ -44,11 +46,8 @@ def main() -> None:
         prep = prepare(ds.load(ref), "ground", cfg.projection)
         image = prep.image
         valid = image.ranges.reshape(-1) > 0
-        true_z = image.heights().reshape(-1)
-        row_z = image.heights(exact=False).reshape(-1)
-        d = image.ranges.reshape(-1).astype(np.float64)
-        true_rho = np.sqrt(np.maximum(d * d - true_z.astype(np.float64) ** 2, 0.0))
-        row_rho = (image.ranges * np.cos(image.elevation)[:, None]).reshape(-1)
+        true_rho, true_z = (a.reshape(-1) for a in pixel_geometry(image, exact=True)[:2])
+        row_rho, row_z = (a.reshape(-1) for a in pixel_geometry(image, exact=False)[:2])
         owner = pixel_owners(image, prep.points)
         on_ground = np.zeros_like(valid)
         on_ground[valid] = ground_mask(prep.labels)[owner[valid]]
