@@ -107,7 +107,8 @@ def base_image(base: dict[str, ModuleType], image: Any) -> Any:
 
 
 class Frames:
-    """Every frame's image, points and ground mask (computed once, with the working tree)."""
+    """Every frame's image, points and ground mask as the clusterers take them (the ground step
+    computed once, with the working tree: :meth:`flic_cli.runs.pipeline.Segmenter.ground_step`)."""
 
     def __init__(self, args: argparse.Namespace, method: str) -> None:
         cfg = load_config()
@@ -117,8 +118,11 @@ class Frames:
         self.items = []
         for ref in ds.refs()[: args.frames]:
             prep = prepare(ds.load(ref), args.setting, cfg.projection)
-            ground = seg.extract_ground(prep.image, prep.points)
-            self.items.append((prep.image, prep.points, ground))
+            ground = seg.ground_step(prep.image, prep.points)
+            if ground is None:
+                self.items.append((prep.image, prep.points, None))
+            else:
+                self.items.append((ground.image, prep.points, ground.mask))
 
 
 def time_both(args: argparse.Namespace) -> None:

@@ -190,10 +190,6 @@ class Segmenter:
     ground_name: str | None
     remover: Any
 
-    def extract_ground(self, image: RangeImage, points: np.ndarray) -> np.ndarray | None:
-        """The remover's (H, W) ground mask, or None when there is no remover."""
-        return None if self.remover is None else self.remover(image, points)
-
     def ground_step(self, image: RangeImage, points: np.ndarray) -> Ground | None:
         """The remover's decision as the clusterers take it (:func:`extract_ground`), or None
         when there is no remover."""
