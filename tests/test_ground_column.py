@@ -665,3 +665,128 @@ def test_a_projected_road_is_ground_at_its_points_heights():
     assert np.array_equal(column_ground(image, point_heights=False), at_rows)
     assert at_points[valid].mean() > 0.999
     assert at_rows[valid].mean() < at_points[valid].mean()
+
+
+# ---- step 8: cells stood on are held out and join what stands on them --------------------------
+
+
+def _foot_street() -> tuple[np.ndarray, np.ndarray]:
+    """The dip street of step 6 with something standing on row 2, columns 15-20: row 1 hits its
+    face 0.1 m farther and about 0.3 m higher."""
+    rho, z = _dip_street()
+    rho[1, 15:21] = rho[2, 15:21] + 0.1
+    z[1, 15:21] = rho[1, 15:21] * np.tan(np.arctan2(-H_S, ROW_DIST[1]))
+    return rho, z
+
+
+def _held(image: RangeImage, **kw) -> tuple[np.ndarray, np.ndarray]:
+    held = np.zeros(image.shape, dtype=bool)
+    return column_ground(image, held=held, **kw), held
+
+
+def test_the_foot_of_what_stands_on_the_ground_is_held_not_taken():
+    image = _image_of(*_foot_street())
+    mask, held = _held(image)
+    assert held[2, 15:21].all() and not mask[2, 15:21].any()
+    assert held.sum() == 6  # nothing else is stood on
+    mask, held = _held(image, foot_deg=85.0)  # not a foot at 85 deg: ground, nothing held
+    assert mask[2, 15:21].all() and not held.any()
+    remover = ColumnGround()
+    assert np.array_equal(remover.split(image)[1], _held(image)[1])
+    assert ColumnGround(hold_feet=False).split(image)[1] is None
+
+
+def _held_property(image: RangeImage, **kw) -> None:
+    """Held cells are exactly what step 6 takes once the foot and under test is off."""
+    mask, held = _held(image, **kw)
+    off = column_ground(image, **{**kw, "foot_deg": 89.999, "under_m": 0.0})
+    assert not (mask & held).any()
+    assert np.array_equal(mask | held, off)
+
+
+def test_held_cells_are_the_cells_step_6_refuses_on_synthetic_streets():
+    person = _person(9.0, 5.0, -1.58, 2)
+    scenes = [_scene(STREET, _car(20.0, -1.5, -H_S, 1)), _scene(STREET, [], [person])]
+    for seed, scene in enumerate(scenes):
+        image, _, _ = _image(scene, seed)
+        _held_property(image)
+        _held_property(image, neighbour_px=30, neighbour_band_m=0.2)
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    arrays(
+        np.float32, (10, 14), elements=st.sampled_from([0.0, 3.0, 3.1, 4.5, 6.0, 6.2, 9.0, 25.0])
+    )
+)
+def test_held_cells_are_the_cells_step_6_refuses_on_random_images(ranges):
+    elevation = np.radians(np.linspace(-2, -24, 10))
+    image = RangeImage(ranges, elevation, np.flatnonzero(ranges.reshape(-1)), "native")
+    _held_property(image, neighbour_band_m=1.0)
+
+
+def _column_image() -> tuple[RangeImage, np.ndarray]:
+    """One column of 5 rows 1 deg apart at 10 m, one point per pixel, and a held mask."""
+    el = np.radians([0.0, -1.0, -2.0, -3.0, -4.0])
+    ranges = np.full((5, 1), 10.0, dtype=np.float32)
+    image = RangeImage(ranges, el, np.arange(5), "native")
+    return image, np.zeros((5, 1), dtype=bool)
+
+
+def test_attach_gives_a_held_cell_the_cluster_standing_on_it():
+    from flic_cli.ground.base import Ground, attach_held
+
+    image, held = _column_image()
+    held[3:] = True  # a chain: row 4 stands on row 3's cluster through row 3
+    labels = np.array([7, 7, 7, 0, 0], dtype=np.int32)  # clustered without rows 3-4
+    ground = Ground(np.zeros_like(held), image, held=held, attach_m=0.5)  # rows 0.17 m apart
+    assert attach_held(ground, labels, 1).tolist() == [1, 1, 1, 1, 1]  # renumbered from 1
+    # the cluster must reach min_size with its attached points: 3 + 2 = 5
+    assert attach_held(ground, labels, 5).tolist() == [1, 1, 1, 1, 1]
+    assert attach_held(ground, labels, 6).tolist() == [0, 0, 0, 0, 0]
+    # beyond attach_m of the cell above: not attached, and nothing below it either
+    far = Ground(np.zeros_like(held), image, held=held, attach_m=0.1)
+    assert attach_held(far, labels, 1).tolist() == [1, 1, 1, 0, 0]
+    # the next valid cell above counts, within 2 rows: row 2 empty, row 1 decides
+    ranges = image.ranges.copy()
+    ranges[2] = 0.0
+    gap = RangeImage(ranges, image.elevation, np.array([0, 1, -1, 3, 4]), "native")
+    labels = np.array([5, 5, 0, 0, 0], dtype=np.int32)
+    got = attach_held(Ground(np.zeros_like(held), gap, held=held, attach_m=0.5), labels, 1)
+    assert got.tolist() == [1, 1, 0, 1, 1]
+    # a held cell under ground or an unclustered cell stays unclustered
+    labels = np.array([3, 3, 0, 0, 0], dtype=np.int32)
+    assert attach_held(ground, labels, 1).tolist() == [1, 1, 0, 0, 0]
+
+
+def test_attach_keeps_the_clusters_order_and_drops_small_ones():
+    from flic_cli.ground.base import Ground, attach_held
+
+    image, held = _column_image()
+    ground = Ground(np.zeros_like(held), image, held=held, attach_m=1.0)
+    labels = np.array([4, 2, 2, 9, -1], dtype=np.int32)
+    assert attach_held(ground, labels, 1).tolist() == [2, 1, 1, 3, 0]
+    assert attach_held(ground, labels, 2).tolist() == [0, 1, 1, 0, 0]
+
+
+@pytest.mark.parametrize("name", ["bogoslavskyi", "flic0", "flic14n", "bridge", "dbscan"])
+def test_the_held_path_without_held_cells_is_the_direct_path(kitti_root, name):
+    """Clustering without a minimum size and dropping small clusters after the attachment gives
+    the method's own labels when nothing is held; with cells held the labels differ."""
+    import dataclasses
+
+    from flic_cli.config import load_config
+    from flic_cli.ground.base import extract_ground
+    from flic_cli.runs.pipeline import build_segmenter, prepare
+
+    cfg = load_config()
+    seg = build_segmenter(cfg, name, "ground", "column")
+    ds = open_dataset(kitti_root)
+    prep = prepare(ds.load(ds.refs()[0]), "ground", cfg.projection)
+    ground = extract_ground(seg.remover, prep.image, prep.points)
+    assert ground.held is not None and ground.held.any() and not (ground.held & ground.mask).any()
+    none = dataclasses.replace(ground, held=np.zeros_like(ground.held))
+    direct = seg.method.segment(ground.image, prep.points, ground.mask)
+    assert np.array_equal(seg.cluster(prep.image, prep.points, none), direct)
+    held = seg.cluster(prep.image, prep.points, ground)
+    assert not np.array_equal(held, direct)

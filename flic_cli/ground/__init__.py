@@ -14,15 +14,24 @@ points) -> (H, W) bool`` (True = ground pixel), see :class:`flic_cli.ground.base
   (:func:`flic_cli.classes.ground_mask`), so no remover runs.
 
 A remover may also decide per point (``point_ground(image, points, mask)``: ``column`` decides
-the points hidden behind their pixel's nearest point on a projected scan);
-:func:`flic_cli.ground.base.extract_ground` runs a remover and gives the clusterers its decision.
+the points hidden behind their pixel's nearest point on a projected scan) and hold cells out of
+the clustering that join the cluster standing on them afterwards (``split``: ``column`` holds the
+feet of things); :func:`flic_cli.ground.base.extract_ground` runs a remover and gives the
+clusterers its decision, :func:`flic_cli.ground.base.attach_held` attaches the held cells.
 
 To add a remover: a component class with ``__call__(image, points)``, named in
 :data:`flic_cli.registry.REMOVERS` under the name that ``[ground.NAME]`` config tables and
 ``--ground-remover`` use.
 """
 
-from flic_cli.ground.base import Ground, GroundRemover, extract_ground, pixel_mask, pixel_owners
+from flic_cli.ground.base import (
+    Ground,
+    GroundRemover,
+    attach_held,
+    extract_ground,
+    pixel_mask,
+    pixel_owners,
+)
 from flic_cli.ground.bogoslavskyi import BogoslavskyiGround, bogoslavskyi_ground
 from flic_cli.ground.column import ColumnGround, column_ground
 from flic_cli.ground.paper import PaperGround, paper_ground
@@ -41,6 +50,7 @@ __all__ = [
     "GroundRemover",
     "PaperGround",
     "PatchworkppGround",
+    "attach_held",
     "bogoslavskyi_ground",
     "column_ground",
     "extract_ground",

@@ -244,10 +244,10 @@ def _column_ground(
     up_rho: np.ndarray,
     up_z: np.ndarray,
     p: np.ndarray,
-) -> np.ndarray:
+) -> tuple[np.ndarray, np.ndarray]:
     """The remover on one image given its geometry (:func:`pixel_geometry`): horizontal range
     and height of every pixel and of the next valid cell above it; ``p`` holds the parameters in
-    the ``_P_*`` layout.
+    the ``_P_*`` layout. Returns the ground mask and the held cells (step 6's stood-on cells).
 
     Every row, from the bottom, in three passes: steps 1, 2 and 5 for every column in vector
     code (:func:`_columns_row`); then the cells that step 3 or 4 asks about, one by one (the set
@@ -270,6 +270,7 @@ def _column_ground(
     under = p[_P_UNDER]
     h, w = rho_img.shape
     out = np.zeros((h, w), dtype=np.bool_)
+    held = np.zeros((h, w), dtype=np.bool_)
     g_rho = np.full(w, -1.0)  # last ground point of the column (-1: none yet)
     g_z = np.zeros(w)
     g_m = np.zeros(w)  # ground gradient
@@ -285,6 +286,7 @@ def _column_ground(
         rrow = rho_img[r]
         zrow = z_img[r]
         orow = out[r]
+        hrow = held[r]
         _columns_row(rrow, zrow, up_rho[r], up_z[r], g_rho, g_z, g_m, last, taken, ask, p)
         pack(ask, ask_w)
         for k in range(nw):
@@ -422,8 +424,10 @@ def _column_ground(
                         found |= now
                     d = up_r - rho
                     steep = (d > -under) if d < -_UNDER_MIN_M else (up_h - z > tan_foot * abs(d))
-                    orow[uq] = (rho > 0.0) & hit & ~(found & steep)
-    return out
+                    stood = found & steep
+                    orow[uq] = (rho > 0.0) & hit & ~stood
+                    hrow[uq] = (rho > 0.0) & hit & stood
+    return out, held
 
 
 @njit(cache=True)
@@ -562,6 +566,10 @@ class ColumnGround:
     under_m : ground under a nearer occluder up to this far behind it is kept, metres.
     hidden_points : step 7, the points hidden behind their pixel's nearest point decided one by
         one (projected scans; a sensor's own image has none).
+    hold_feet : step 8, the cells stood on (the foot and under test of step 6) are held out of
+        the clustering and join the cluster of the cell that stands on them afterwards
+        (False: they are clustered like any object cell).
+    attach_m : a held cell joins the cell standing on it only within this distance, metres.
     point_heights : on projected scans, every pixel at its nearest point's height (False: at its
         range along its row's elevation, as on a sensor's own image; see
         :func:`pixel_geometry`).
@@ -581,10 +589,20 @@ class ColumnGround:
     under_m: Annotated[float, Field(ge=0, description="metres")] = 2.0
     hidden_points: bool = True
     point_heights: bool = True
+    hold_feet: bool = True
+    attach_m: Annotated[float, Field(gt=0, description="metres")] = 1.5
 
     def __call__(self, image: RangeImage, points: np.ndarray | None = None) -> np.ndarray:
         """(H, W) bool ground mask of ``image`` (see :func:`column_ground`)."""
-        return column_ground(
+        return self.split(image, points)[0]
+
+    def split(
+        self, image: RangeImage, points: np.ndarray | None = None
+    ) -> tuple[np.ndarray, np.ndarray | None]:
+        """The ground mask of ``image`` and its held cells (step 8; None without it), both
+        (H, W) bool."""
+        held = np.zeros(image.shape, dtype=np.bool_) if self.hold_feet else None
+        mask = column_ground(
             image,
             self.sensor_height_m,
             self.noise_m,
@@ -599,7 +617,9 @@ class ColumnGround:
             self.foot_deg,
             self.under_m,
             self.point_heights,
+            held,
         )
+        return mask, held
 
     def point_ground(
         self, image: RangeImage, points: np.ndarray, mask: np.ndarray
@@ -635,6 +655,7 @@ def column_ground(
     foot_deg: float = ColumnGround.foot_deg,
     under_m: float = ColumnGround.under_m,
     point_heights: bool = ColumnGround.point_heights,
+    held: np.ndarray | None = None,
 ) -> np.ndarray:
     """Ground pixels by column-wise ground tracking (see the module docstring).
 
@@ -661,6 +682,9 @@ def column_ground(
     point_heights : on a projected scan, every pixel at its nearest point's height rather than
         at its range along its row's elevation (:func:`pixel_geometry`); a sensor's own image
         has only the latter.
+    held : (H, W) bool array or None; if given, it is filled with the held cells: those step 6
+        would take but for the foot and under test (stood on by something within ``foot_deg``
+        or ``under_m``), which :class:`ColumnGround` holds out of the clustering.
 
     Returns
     -------
@@ -681,4 +705,7 @@ def column_ground(
         float(foot_deg),
         float(under_m),
     )
-    return _column_ground(*geometry, params)
+    mask, stood = _column_ground(*geometry, params)
+    if held is not None:
+        held[...] = stood
+    return mask

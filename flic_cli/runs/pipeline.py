@@ -19,7 +19,7 @@ from flic_cli.classes import ground_mask
 from flic_cli.config import Config
 from flic_cli.config.component import check_installed
 from flic_cli.errors import FlicInputError
-from flic_cli.ground.base import Ground, extract_ground
+from flic_cli.ground.base import Ground, attach_held, extract_ground
 from flic_cli.io.base import Frame, FrameRef
 from flic_cli.projection import Projection
 from flic_cli.range_image import RangeImage
@@ -196,10 +196,16 @@ class Segmenter:
         return None if self.remover is None else extract_ground(self.remover, image, points)
 
     def cluster(self, image: RangeImage, points: np.ndarray, ground: Ground | None) -> np.ndarray:
-        """The method's per-point labels given the ground step's result (or None)."""
+        """The method's per-point labels given the ground step's result (or None): with held
+        cells, the clusterer runs without them and without a minimum size, and they join the
+        cluster standing on them (:func:`attach_held`) before small clusters are dropped."""
         if ground is None:
             return self.method.segment(image, points, None)
-        return self.method.segment(ground.image, points, ground.mask)
+        if ground.held is None:
+            return self.method.segment(ground.image, points, ground.mask)
+        every = dataclasses.replace(self.method, min_size=1)
+        labels = every.segment(ground.image, points, ground.left_out)
+        return attach_held(ground, labels, self.method.min_size)
 
     def run(self, image: RangeImage, points: np.ndarray) -> tuple[np.ndarray, Ground | None]:
         """Per-point labels (0 = none or ground) and the ground step's result (or None)."""
