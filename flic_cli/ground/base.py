@@ -166,39 +166,44 @@ def _attach(
     min_size: int,
 ) -> np.ndarray:
     """:func:`attach_held` on arrays (``cos1[r]``, ``cos2[r]``: cosine of the elevation
-    difference between rows ``r`` and ``r + 1``, ``r + 2``)."""
+    difference between rows ``r`` and ``r + 1``, ``r + 2``). Pixels are indexed flat (no
+    division per point)."""
     h, w = ranges.shape
-    cell = np.zeros((h, w), dtype=np.int32)
+    flat_held = held.reshape(h * w)
+    rng = ranges.reshape(h * w)
+    cell = np.zeros(h * w, dtype=np.int32)
+    top = 0
     for i in range(point_pixel.size):
         p = point_pixel[i]
         if p >= 0 and labels[i] > 0:
-            cell[p // w, p % w] = labels[i]
+            cell[p] = labels[i]
+            top = max(top, labels[i])
     for r in range(1, h):
-        for c in range(w):
-            if not held[r, c]:
+        for p in range(r * w, (r + 1) * w):
+            if not flat_held[p]:
                 continue
-            d = np.float64(ranges[r, c])
+            d = np.float64(rng[p])
             for k in range(1, 3):
                 if r < k:
                     break
-                u = np.float64(ranges[r - k, c])
+                q = p - k * w
+                u = np.float64(rng[q])
                 if u <= 0.0:
                     continue
                 cos = cos1[r - 1] if k == 1 else cos2[r - 2]
                 if d * d + u * u - 2.0 * d * u * cos <= attach_sq:
-                    cell[r, c] = cell[r - k, c]
+                    cell[p] = cell[q]
                 break
-    out = labels.copy()
-    top = 0
+    out = np.empty_like(labels)
+    size = np.zeros(top + 1, dtype=np.int64)
     for i in range(point_pixel.size):
         p = point_pixel[i]
-        if p >= 0 and held[p // w, p % w]:
-            out[i] = cell[p // w, p % w]
-        top = max(top, out[i])
-    size = np.zeros(top + 1, dtype=np.int64)
-    for i in range(out.size):
-        if out[i] > 0:
-            size[out[i]] += 1
+        x = labels[i]
+        if p >= 0 and flat_held[p]:
+            x = cell[p]
+        x = max(x, 0)
+        out[i] = x
+        size[x] += 1
     new = np.zeros(top + 1, dtype=np.int32)
     n = 0
     for j in range(1, top + 1):
@@ -206,7 +211,7 @@ def _attach(
             n += 1
             new[j] = n
     for i in range(out.size):
-        out[i] = new[max(out[i], 0)]
+        out[i] = new[out[i]]
     return out
 
 
