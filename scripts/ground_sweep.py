@@ -16,6 +16,9 @@ Usage::
         --params neighbour_px,neighbour_band_m,foot_deg,under_m,base_band_m \
         --methods flic0,flic6,flic14,bridge,dbscan-fast \
         --out results/ground/sweep_column_neighbours.csv
+    python scripts/ground_sweep.py ../shared/data/semantickitti --params hold_feet,attach_m \
+        --methods flic0,flic6,flic14,flic14n,bridge,dbscan-fast \
+        --out results/ground/sweep_column_hold.csv
 """
 
 from __future__ import annotations
@@ -35,7 +38,7 @@ from flic_cli.io import open_dataset
 from flic_cli.io.atomic import write_table
 from flic_cli.metrics import match_objects
 from flic_cli.metrics.ground import GroundCounts, ground_counts, ground_scores
-from flic_cli.runs.pipeline import prepare
+from flic_cli.runs.pipeline import cluster_ground, prepare
 
 #: Values tried per parameter (the default is always included).
 GRID: dict[str, list[float]] = {
@@ -54,6 +57,9 @@ GRID: dict[str, list[float]] = {
     # the pixels' geometry on projected scans, and step 7 (hidden points)
     "point_heights": [False, True],
     "hidden_points": [False, True],
+    # step 8, the feet held out and attached
+    "hold_feet": [False, True],
+    "attach_m": [0.5, 1.0, 1.5, 2.5],
 }
 
 
@@ -77,7 +83,7 @@ def iou_mu(pairs: list[tuple], methods: dict, grounds: list[Ground] | None) -> d
             if grounds is None:
                 labels = method.segment(prep.image, prep.points, None)
             else:
-                labels = method.segment(grounds[k].image, prep.points, grounds[k].mask)
+                labels = cluster_ground(method, prep.points, grounds[k])
             ious[name].append(match_objects(prep.labels, labels).iou)
     return {f"iou_{m}": round(100 * float(np.mean(np.concatenate(v))), 2) for m, v in ious.items()}
 

@@ -169,6 +169,21 @@ def _in_file(finite: np.ndarray | None, keep: np.ndarray | None) -> np.ndarray |
     return out
 
 
+def cluster_ground(method: Any, points: np.ndarray, ground: Ground) -> np.ndarray:
+    """``method``'s per-point labels after a ground step (:func:`extract_ground`).
+
+    With held cells (:attr:`Ground.held`), the clusterer runs without them and without a minimum
+    size, the held cells join the cluster standing on them (:func:`attach_held`), and then the
+    clusters under the method's ``min_size`` are dropped, so that a thing's feet count towards
+    it.
+    """
+    if ground.held is None:
+        return method.segment(ground.image, points, ground.mask)
+    every = dataclasses.replace(method, min_size=1)
+    labels = every.segment(ground.image, points, ground.left_out)
+    return attach_held(ground, labels, method.min_size)
+
+
 @dataclass(frozen=True)
 class Segmenter:
     """One method with its ground remover: ``segmenter(image, points) -> (labels, ground)``.
@@ -196,16 +211,10 @@ class Segmenter:
         return None if self.remover is None else extract_ground(self.remover, image, points)
 
     def cluster(self, image: RangeImage, points: np.ndarray, ground: Ground | None) -> np.ndarray:
-        """The method's per-point labels given the ground step's result (or None): with held
-        cells, the clusterer runs without them and without a minimum size, and they join the
-        cluster standing on them (:func:`attach_held`) before small clusters are dropped."""
+        """The method's per-point labels given the ground step's result (or None)."""
         if ground is None:
             return self.method.segment(image, points, None)
-        if ground.held is None:
-            return self.method.segment(ground.image, points, ground.mask)
-        every = dataclasses.replace(self.method, min_size=1)
-        labels = every.segment(ground.image, points, ground.left_out)
-        return attach_held(ground, labels, self.method.min_size)
+        return cluster_ground(self.method, points, ground)
 
     def run(self, image: RangeImage, points: np.ndarray) -> tuple[np.ndarray, Ground | None]:
         """Per-point labels (0 = none or ground) and the ground step's result (or None)."""
