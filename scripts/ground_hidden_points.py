@@ -14,7 +14,8 @@ the hidden points (those that are not the nearest of their pixel) are decided:
 
 Every variant goes through :func:`flic_cli.ground.base.extract_ground`, as ``flic evaluate``
 does: the points taken as ground outside ground pixels leave their pixel, so every clusterer
-leaves them out.
+leaves them out. ``column`` runs without step 8 (``hold_feet = false``), so that only the hidden
+points' decision differs between the variants.
 
 Usage::
 
@@ -65,7 +66,9 @@ def main() -> None:
 
     cfg = load_config()
     methods = {m: cfg.method(m).method for m in args.methods.split(",")}
-    column = cfg.remover("column")
+    # steps 1-7 only: step 8's held feet would change the clustering of every variant but the
+    # labels' (which has none), and this compares the hidden points' decision alone
+    column = ColumnGround(**{**cfg.remover("column").__dict__, "hold_feet": False})
     pixel_only = ColumnGround(**{**column.__dict__, "hidden_points": False})
     ds = open_dataset(args.data)
     frames = []

@@ -13,8 +13,10 @@ that cell is a thing object's (a label, which a remover does not have). Masks:
 - ``labels - thing feet``: the same, but ground pixels under or at the foot of a thing object
   left (what a remover that keeps every object's foot does);
 - ``labels - other feet``: ground pixels at the foot of anything else left;
-- ``column``: flic's remover; ``column + labels at thing feet``: the remover, with the labels'
-  decision on the pixels under or at the foot of thing objects.
+- ``column``: flic's remover as ``flic evaluate`` runs it (steps 1-8: hidden points decided one
+  by one, the feet held out and attached); ``column + labels at thing feet``: the remover's
+  pixel mask (steps 1-6), with the labels' decision on the pixels under or at the foot of thing
+  objects.
 
 Writes one row per mask: ground precision / recall / F1, thing points removed, IoU_mu per method
 and the gap to the no-ground setting. With ``--counts`` it also prints, for the pixels the remover
@@ -44,7 +46,7 @@ from flic_cli.io import open_dataset
 from flic_cli.io.atomic import write_table
 from flic_cli.metrics import match_objects
 from flic_cli.metrics.ground import GroundCounts, ground_counts, ground_scores
-from flic_cli.runs.pipeline import prepare
+from flic_cli.runs.pipeline import cluster_ground, prepare
 
 CATEGORIES = ("free", "under", "foot", "free-thing", "under-thing", "foot-thing")
 
@@ -150,10 +152,10 @@ def main() -> None:
             ("labels", gr),
             ("labels - thing feet", gr & ~thing_feet),
             ("labels - other feet", gr & ~other_feet),
-            ("column", col),
             ("column + labels at thing feet", np.where(thing_feet, gr, col)),
         ):
             grounds[name].append(Ground(mask, img))
+        grounds["column"].append(extract_ground(column, img, g.points))
         if args.counts:
             hh = row_height(rho, z, col)
             near = (img.ranges > 0) & ~col & (np.abs(np.nan_to_num(hh, nan=9.0)) <= args.band)
@@ -170,7 +172,7 @@ def main() -> None:
                     labels = method.segment(n.image, n.points, None)
                     ious.append(match_objects(n.labels, labels).iou)
                 else:
-                    labels = method.segment(use[k].image, g.points, use[k].mask)
+                    labels = cluster_ground(method, g.points, use[k])
                     ious.append(match_objects(g.labels, labels).iou)
             res[name] = 100 * float(np.mean(np.concatenate(ious)))
         return res
