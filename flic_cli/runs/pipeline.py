@@ -177,7 +177,7 @@ def cluster_ground(method: Any, points: np.ndarray, ground: Ground) -> np.ndarra
     clusters under the method's ``min_size`` are dropped, so that a thing's feet count towards
     it.
     """
-    if ground.held is None:
+    if ground.held is None or not ground.held.any():
         return method.segment(ground.image, points, ground.mask)
     every = dataclasses.replace(method, min_size=1)
     labels = every.segment(ground.image, points, ground.left_out)
