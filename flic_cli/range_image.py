@@ -47,6 +47,12 @@ class RangeImage:
         own image, whose pixels lie on their row's elevation. A projected pixel's point is not:
         its row's elevation is a median over the beam (rings) or the middle of a bin
         (spherical). See :meth:`heights`.
+    attached : (K, 3) int64 array or None
+        Held pixels, set by a ground step (step 8 of
+        :class:`flic_cli.ground.column.ColumnGround`): per row a held pixel, the pixel standing
+        on it whose cluster its points take (-1: none) and its number of points. The
+        clusterers leave held pixels out (they link nothing) and count their points towards
+        the cluster they take.
     """
 
     ranges: np.ndarray
@@ -55,6 +61,7 @@ class RangeImage:
     projection: str
     counts: np.ndarray | None = field(default=None, repr=False, compare=False)
     point_z: np.ndarray | None = field(default=None, repr=False, compare=False)
+    attached: np.ndarray | None = field(default=None, repr=False, compare=False)
 
     @property
     def shape(self) -> tuple[int, int]:

@@ -107,8 +107,9 @@ def base_image(base: dict[str, ModuleType], image: Any) -> Any:
 
 
 class Frames:
-    """Every frame's image, points and ground mask as the clusterers take them (the ground step
-    computed once, with the working tree: :meth:`flic_cli.runs.pipeline.Segmenter.ground_step`)."""
+    """Every frame's image, points and the mask of the cells left out (ground and held) as the
+    clusterers take them (the ground step computed once, with the working tree:
+    :meth:`flic_cli.runs.pipeline.Segmenter.ground_step`)."""
 
     def __init__(self, args: argparse.Namespace, method: str) -> None:
         cfg = load_config()
@@ -122,7 +123,7 @@ class Frames:
             if ground is None:
                 self.items.append((prep.image, prep.points, None))
             else:
-                self.items.append((ground.image, prep.points, ground.mask))
+                self.items.append((ground.image, prep.points, ground.left_out))
 
 
 def time_both(args: argparse.Namespace) -> None:

@@ -726,67 +726,114 @@ def test_held_cells_are_the_cells_step_6_refuses_on_random_images(ranges):
 
 
 def _column_image() -> tuple[RangeImage, np.ndarray]:
-    """One column of 5 rows 1 deg apart at 10 m, one point per pixel, and a held mask."""
+    """One column of 5 rows 1 deg apart at 10 m (0.17 m between neighbours), one point per
+    pixel, and an empty held mask."""
     el = np.radians([0.0, -1.0, -2.0, -3.0, -4.0])
     ranges = np.full((5, 1), 10.0, dtype=np.float32)
-    image = RangeImage(ranges, el, np.arange(5), "native")
+    counts = np.ones((5, 1), dtype=np.int32)
+    image = RangeImage(ranges, el, np.arange(5), "native", counts)
     return image, np.zeros((5, 1), dtype=bool)
 
 
-def test_attach_gives_a_held_cell_the_cluster_standing_on_it():
-    from flic_cli.ground.base import Ground, attach_held
-
-    image, held = _column_image()
-    held[3:] = True  # a chain: row 4 stands on row 3's cluster through row 3
-    labels = np.array([7, 7, 7, 0, 0], dtype=np.int32)  # clustered without rows 3-4
-    ground = Ground(np.zeros_like(held), image, held=held, attach_m=0.5)  # rows 0.17 m apart
-    assert attach_held(ground, labels, 1).tolist() == [1, 1, 1, 1, 1]  # renumbered from 1
-    # the cluster must reach min_size with its attached points: 3 + 2 = 5
-    assert attach_held(ground, labels, 5).tolist() == [1, 1, 1, 1, 1]
-    assert attach_held(ground, labels, 6).tolist() == [0, 0, 0, 0, 0]
-    # beyond attach_m of the cell above: not attached, and nothing below it either
-    far = Ground(np.zeros_like(held), image, held=held, attach_m=0.1)
-    assert attach_held(far, labels, 1).tolist() == [1, 1, 1, 0, 0]
-    # the next valid cell above counts, within 2 rows: row 2 empty, row 1 decides
-    ranges = image.ranges.copy()
-    ranges[2] = 0.0
-    gap = RangeImage(ranges, image.elevation, np.array([0, 1, -1, 3, 4]), "native")
-    labels = np.array([5, 5, 0, 0, 0], dtype=np.int32)
-    got = attach_held(Ground(np.zeros_like(held), gap, held=held, attach_m=0.5), labels, 1)
-    assert got.tolist() == [1, 1, 0, 1, 1]
-    # a held cell under ground or an unclustered cell stays unclustered
-    labels = np.array([3, 3, 0, 0, 0], dtype=np.int32)
-    assert attach_held(ground, labels, 1).tolist() == [1, 1, 0, 0, 0]
+def test_a_held_foot_takes_the_cell_standing_on_it():
+    image = _image_of(*_foot_street())  # 40 columns; row 1 stands on row 2, columns 15-20
+    mask, held, attached = ColumnGround().split(image)
+    cols = np.arange(15, 21)
+    assert sorted(attached.tolist()) == [[80 + c, 40 + c, 1] for c in cols]  # 0.3 m apart
+    assert np.array_equal(np.sort(attached[:, 0]), np.flatnonzero(held))
+    assert (ColumnGround(attach_m=0.2).split(image)[2][:, 1] == -1).all()
+    assert ColumnGround(hold_feet=False).split(image)[1:] == (None, None)
 
 
-def test_attach_keeps_the_clusters_order_and_drops_small_ones():
-    from flic_cli.ground.base import Ground, attach_held
+def test_held_cells_standing_on_ground_or_held_cells():
+    from flic_cli.ground.column import _attached
 
-    image, held = _column_image()
-    ground = Ground(np.zeros_like(held), image, held=held, attach_m=1.0)
-    labels = np.array([4, 2, 2, 9, -1], dtype=np.int32)
-    assert attach_held(ground, labels, 1).tolist() == [2, 1, 1, 3, 0]
-    assert attach_held(ground, labels, 2).tolist() == [0, 1, 1, 0, 0]
+    # one column of 5 rows (w = 1); the kernel lists held cells from the bottom row up
+    held = np.array([False, False, True, True, True])
+    ground = np.zeros(5, dtype=bool)
+    counts = np.array([1, 1, 2, 3, 1], dtype=np.int32)
+    cells = np.array([4, 3, 2])
+    standers = np.array([3, 2, 1])  # a chain: 4 under 3 under 2, which stands on 1
+    got = _attached(cells, standers, ground, held, counts, 1)
+    assert got.tolist() == [[2, 1, 2], [3, 1, 3], [4, 1, 1]]
+    ground[1] = True  # standing on ground: none, down the chain
+    assert _attached(cells, standers, ground, held, counts, 1)[:, 1].tolist() == [-1, -1, -1]
+    ground[1] = False
+    standers = np.array([3, -1, 1])  # row 3 too far from row 2: none for rows 3 and 4
+    assert _attached(cells, standers, ground, held, counts, 1)[:, 1].tolist() == [1, -1, -1]
 
 
-@pytest.mark.parametrize("name", ["bogoslavskyi", "flic0", "flic14n", "bridge", "dbscan"])
-def test_the_held_path_without_held_cells_is_the_direct_path(kitti_root, name):
-    """Clustering without a minimum size and dropping small clusters after the attachment gives
-    the method's own labels when nothing is held; with cells held the labels differ."""
+def _attached(image: RangeImage, rows: list[tuple[int, int]]) -> RangeImage:
+    """``image`` with held pixels ``(pixel, target)`` (one point each)."""
     import dataclasses
 
+    attached = np.array([(p, t, 1) for p, t in rows], dtype=np.int64)
+    return dataclasses.replace(image, attached=attached)
+
+
+@pytest.mark.parametrize("kind", ["flic", "flic-scipy", "bridge", "bogoslavskyi", "dbscan"])
+def test_held_points_count_towards_the_minimum_size_and_link_nothing(kind):
+    from flic_cli.methods import Bogoslavskyi, Bridge, Dbscan, Flic
+
+    def method(min_size: int):
+        return {
+            "flic": Flic(min_size=min_size),
+            "flic-scipy": Flic(min_size=min_size, backend="scipy"),
+            "bridge": Bridge(min_size=min_size),
+            "bogoslavskyi": Bogoslavskyi(min_size=min_size, angle_deg=1.0),
+            "dbscan": Dbscan(min_size=min_size, eps_m=0.3, min_samples=1),
+        }[kind]
+
+    image, held = _column_image()
+    points = image.to_points()[image.point_pixel]
+    held[3:] = True
+    with_held = _attached(image, [(3, 2), (4, 2)])
+    assert method(5).segment(with_held, points, held).tolist() == [1, 1, 1, 1, 1]
+    assert method(6).segment(with_held, points, held).tolist() == [0, 0, 0, 0, 0]
+    # without the attachment, the held cells are left out and the rest is too small for 5
+    assert method(5).segment(image, points, held).tolist() == [0, 0, 0, 0, 0]
+    # a held cell between two clusters links nothing: rows 0-1 and 3-4 stay apart
+    held = np.zeros_like(held)
+    held[2] = True
+    ranges = image.ranges.copy()
+    ranges[1] = 30.0  # row 1 far behind: row 2 has no cell within 0.5 m above it
+    far = RangeImage(ranges, image.elevation, np.arange(5), "native", image.counts)
+    points = far.to_points()[far.point_pixel]
+    got = method(1).segment(_attached(far, [(2, -1)]), points, held).tolist()
+    assert got[2] == 0 and got[3] == got[4] and len({got[0], got[1], got[3]}) == 3
+
+
+@pytest.mark.parametrize(
+    "name", ["bogoslavskyi", "flic0", "flic14n", "flic0-scipy", "bridge", "dbscan"]
+)
+def test_held_points_take_the_cluster_standing_on_them(kitti_root, name):
     from flic_cli.config import load_config
-    from flic_cli.ground.base import extract_ground
-    from flic_cli.runs.pipeline import build_segmenter, prepare
+    from flic_cli.ground.base import extract_ground, pixel_owners
+    from flic_cli.runs.pipeline import build_segmenter, cluster_ground, prepare
 
     cfg = load_config()
     seg = build_segmenter(cfg, name, "ground", "column")
     ds = open_dataset(kitti_root)
     prep = prepare(ds.load(ds.refs()[0]), "ground", cfg.projection)
     ground = extract_ground(seg.remover, prep.image, prep.points)
-    assert ground.held is not None and ground.held.any() and not (ground.held & ground.mask).any()
-    none = dataclasses.replace(ground, held=np.zeros_like(ground.held))
-    direct = seg.method.segment(ground.image, prep.points, ground.mask)
-    assert np.array_equal(seg.cluster(prep.image, prep.points, none), direct)
-    held = seg.cluster(prep.image, prep.points, ground)
-    assert not np.array_equal(held, direct)
+    assert ground.held.any() and not (ground.held & ground.mask).any()
+    attached = ground.image.attached
+    assert np.array_equal(np.sort(attached[:, 0]), np.flatnonzero(ground.held))
+    target = np.full(ground.held.size, -1)
+    target[attached[:, 0]] = attached[:, 1]
+    assert not ground.held.reshape(-1)[attached[attached[:, 1] >= 0, 1]].any()
+    assert not ground.mask.reshape(-1)[attached[attached[:, 1] >= 0, 1]].any()
+    labels = cluster_ground(seg.method, prep.points, ground)
+    pix = ground.image.point_pixel
+    held_pts = np.flatnonzero((pix >= 0) & ground.held.reshape(-1)[np.maximum(pix, 0)])
+    assert not ground.on_ground[held_pts].any()  # held points are not ground
+    t = target[pix[held_pts]]
+    assert (t < 0).any() and (labels[held_pts][t >= 0] > 0).any()
+    assert not labels[held_pts][t < 0].any()
+    if name == "dbscan":  # a point of the target pixel in the same cluster
+        pairs = set(zip(pix.tolist(), labels.tolist(), strict=True))
+        got = labels[held_pts][t >= 0]
+        assert all(lab == 0 or (q, lab) in pairs for q, lab in zip(t[t >= 0], got, strict=True))
+    else:  # every point of a pixel has the pixel's label
+        owner = pixel_owners(ground.image, prep.points)
+        assert np.array_equal(labels[held_pts][t >= 0], labels[owner[t[t >= 0]]])

@@ -17,7 +17,7 @@ A remover may also decide per point (``point_ground(image, points, mask)``: ``co
 the points hidden behind their pixel's nearest point on a projected scan) and hold cells out of
 the clustering that join the cluster standing on them afterwards (``split``: ``column`` holds the
 feet of things); :func:`flic_cli.ground.base.extract_ground` runs a remover and gives the
-clusterers its decision, :func:`flic_cli.ground.base.attach_held` attaches the held cells.
+clusterers its decision, held cells included.
 
 To add a remover: a component class with ``__call__(image, points)``, named in
 :data:`flic_cli.registry.REMOVERS` under the name that ``[ground.NAME]`` config tables and
@@ -27,7 +27,6 @@ To add a remover: a component class with ``__call__(image, points)``, named in
 from flic_cli.ground.base import (
     Ground,
     GroundRemover,
-    attach_held,
     extract_ground,
     pixel_mask,
     pixel_owners,
@@ -50,7 +49,6 @@ __all__ = [
     "GroundRemover",
     "PaperGround",
     "PatchworkppGround",
-    "attach_held",
     "bogoslavskyi_ground",
     "column_ground",
     "extract_ground",

@@ -28,10 +28,11 @@ class GroundRemover(Protocol):
     pixel's decision (:func:`point_ground`); see :func:`extract_ground`.
 
     And a remover may hold cells out of the clustering that it cannot decide on its own
-    (``split(image, points) -> (mask, held)``, ``held`` (H, W) bool or None, and ``attach_m``):
+    (``split(image, points) -> (mask, held, attached)``: ``held`` (H, W) bool and ``attached``,
+    the cell standing on each, :attr:`flic_cli.range_image.RangeImage.attached`; or None, None):
     the cells under the foot of something standing on the ground, which belong to that thing or
     to the ground. Clustered, they join neighbouring objects to each other along the ground; held
-    out, they take the cluster of the cell standing on them afterwards (:func:`attach_held`).
+    out, their points take the cluster of the cell standing on them.
     """
 
     def __call__(self, image: RangeImage, points: np.ndarray) -> np.ndarray: ...
@@ -46,20 +47,19 @@ class Ground:
     mask : (H, W) bool, the ground pixels.
     image : the range image the clusterers see: the scan's image, except that the points taken
         as ground whose pixel is not ground have left their pixel (``point_pixel`` -1, not in
-        the pixel's point count), so that no clusterer counts or labels them.
+        the pixel's point count), so that no clusterer counts or labels them, and that it names
+        the cell standing on every held cell (``attached``).
     decided : (N,) bool, the remover's own decision per point, or None where every point takes
         its pixel's.
     held : (H, W) bool, the cells held out of the clustering (not ground, never ground
-        pixels), which :func:`attach_held` gives the cluster of the cell standing on them; None:
-        none.
-    attach_m : how far the cell standing on a held cell may be, metres.
+        pixels), whose points take the cluster of the cell standing on them (``image.attached``);
+        None: none.
     """
 
     mask: np.ndarray
     image: RangeImage
     decided: np.ndarray | None = None
     held: np.ndarray | None = None
-    attach_m: float = 0.0
 
     @property
     def left_out(self) -> np.ndarray:
@@ -98,121 +98,26 @@ def extract_ground(remover: GroundRemover, image: RangeImage, points: np.ndarray
     """Run ``remover`` on a scan: its pixel mask, its per-point decision, its held cells and the
     image the clusterers see (:class:`Ground`)."""
     split = getattr(remover, "split", None)
-    mask, held = (remover(image, points), None) if split is None else split(image, points)
-    hold = {} if held is None else {"held": held, "attach_m": float(remover.attach_m)}
+    if split is None:
+        mask, held, attached = remover(image, points), None, None
+    else:
+        mask, held, attached = split(image, points)
     decide = getattr(remover, "point_ground", None)
     decided = None if decide is None else decide(image, points, mask)
-    if decided is None:
-        return Ground(mask, image, **hold)
-    pix, counts, moved = _leave_pixels(
-        np.ascontiguousarray(image.point_pixel, dtype=np.int64),
-        np.ascontiguousarray(mask, dtype=np.bool_).reshape(-1),
-        decided,
-        np.ascontiguousarray(image.point_counts(), dtype=np.int32).reshape(-1),
-    )
-    if not moved:
-        return Ground(mask, image, decided, **hold)
-    clustered = dataclasses.replace(image, point_pixel=pix, counts=counts.reshape(image.shape))
-    return Ground(mask, clustered, decided, **hold)
-
-
-def attach_held(ground: Ground, labels: np.ndarray, min_size: int) -> np.ndarray:
-    """Give the held points the cluster of the cell standing on them; drop small clusters.
-
-    The clusterer ran with the held cells left out (:attr:`Ground.left_out`) and without a
-    minimum size. From the top row down, a held cell takes the cluster of the next valid cell
-    above it in its column, within 2 rows (the cell whose rise made it a foot), where that cell
-    is within ``ground.attach_m`` (3D, at the rows' elevations), else none; a held cell below a
-    held cell takes what that one took. Every point of a held cell takes its cell's cluster.
-    Then clusters of fewer than ``min_size`` points are dropped and the rest renumbered in the
-    order of their ids.
-
-    Parameters
-    ----------
-    ground : the ground step's result, with ``held`` cells.
-    labels : (N,) int, the clusterer's labels per point (0 = none), without a minimum size.
-    min_size : smallest cluster kept, points.
-
-    Returns
-    -------
-    (N,) int32 labels, 0 = none or ground.
-    """
-    image = ground.image
-    held = ground.held
-    if held is None:
-        raise ValueError("attach_held needs a ground step with held cells")
-    el = np.asarray(image.elevation, dtype=np.float64)
-    return _attach(
-        np.ascontiguousarray(labels, dtype=np.int32),
-        np.ascontiguousarray(image.point_pixel, dtype=np.int64),
-        np.ascontiguousarray(held, dtype=np.bool_),
-        np.ascontiguousarray(image.ranges, dtype=np.float32),
-        np.cos(el[1:] - el[:-1]),
-        np.cos(el[2:] - el[:-2]),
-        float(ground.attach_m) ** 2,
-        int(min_size),
-    )
-
-
-@njit(cache=True)
-def _attach(
-    labels: np.ndarray,
-    point_pixel: np.ndarray,
-    held: np.ndarray,
-    ranges: np.ndarray,
-    cos1: np.ndarray,
-    cos2: np.ndarray,
-    attach_sq: float,
-    min_size: int,
-) -> np.ndarray:
-    """:func:`attach_held` on arrays (``cos1[r]``, ``cos2[r]``: cosine of the elevation
-    difference between rows ``r`` and ``r + 1``, ``r + 2``). Pixels are indexed flat (no
-    division per point)."""
-    h, w = ranges.shape
-    flat_held = held.reshape(h * w)
-    rng = ranges.reshape(h * w)
-    cell = np.zeros(h * w, dtype=np.int32)
-    top = 0
-    for i in range(point_pixel.size):
-        p = point_pixel[i]
-        if p >= 0 and labels[i] > 0:
-            cell[p] = labels[i]
-            top = max(top, labels[i])
-    for r in range(1, h):
-        for p in range(r * w, (r + 1) * w):
-            if not flat_held[p]:
-                continue
-            d = np.float64(rng[p])
-            for k in range(1, 3):
-                if r < k:
-                    break
-                q = p - k * w
-                u = np.float64(rng[q])
-                if u <= 0.0:
-                    continue
-                cos = cos1[r - 1] if k == 1 else cos2[r - 2]
-                if d * d + u * u - 2.0 * d * u * cos <= attach_sq:
-                    cell[p] = cell[q]
-                break
-    out = np.empty_like(labels)
-    size = np.zeros(top + 1, dtype=np.int64)
-    for i in range(point_pixel.size):
-        p = point_pixel[i]
-        x = labels[i]
-        if p >= 0 and flat_held[p]:
-            x = cell[p]
-        x = max(x, 0)
-        out[i] = x
-        size[x] += 1
-    new = np.zeros(top + 1, dtype=np.int32)
-    n = 0
-    for j in range(1, top + 1):
-        if size[j] >= min_size:
-            n += 1
-            new[j] = n
-    for i in range(out.size):
-        out[i] = new[out[i]]
-    return out
+    clustered = image
+    if decided is not None:
+        pix, counts, moved = _leave_pixels(
+            np.ascontiguousarray(image.point_pixel, dtype=np.int64),
+            np.ascontiguousarray(mask, dtype=np.bool_).reshape(-1),
+            decided,
+            np.ascontiguousarray(image.point_counts(), dtype=np.int32).reshape(-1),
+        )
+        if moved:
+            counts = counts.reshape(image.shape)
+            clustered = dataclasses.replace(image, point_pixel=pix, counts=counts)
+    if attached is not None and len(attached):
+        clustered = dataclasses.replace(clustered, attached=attached)
+    return Ground(mask, clustered, decided, held)
 
 
 def per_sensor(

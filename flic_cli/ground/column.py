@@ -113,7 +113,8 @@ _HIDDEN_M = 1e-3  # a point this much farther than its pixel's range is hidden b
 
 # Layout of the parameter vector of :func:`_column_ground` (one array: one argument to type).
 (_P_SENSOR, _P_NOISE, _P_TAN_CHANGE, _P_KERB, _P_MAX_STEP, _P_TAN_FLAT, _P_SEED_TOL,
- _P_BASE_BAND, _P_NB_PX, _P_NB_BAND, _P_TAN_FOOT, _P_UNDER, _P_LEN) = range(13)  # fmt: skip
+ _P_BASE_BAND, _P_NB_PX, _P_NB_BAND, _P_TAN_FOOT, _P_UNDER, _P_ATTACH_SQ,
+ _P_LEN) = range(14)  # fmt: skip
 
 
 @njit(inline="always")
@@ -244,10 +245,12 @@ def _column_ground(
     up_rho: np.ndarray,
     up_z: np.ndarray,
     p: np.ndarray,
-) -> tuple[np.ndarray, np.ndarray]:
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """The remover on one image given its geometry (:func:`pixel_geometry`): horizontal range
     and height of every pixel and of the next valid cell above it; ``p`` holds the parameters in
-    the ``_P_*`` layout. Returns the ground mask and the held cells (step 6's stood-on cells).
+    the ``_P_*`` layout. Returns the ground mask, the held cells (step 6's stood-on cells,
+    step 8), and per held cell, in the order found (rows from the bottom), its flat pixel index
+    and that of the cell standing on it if within ``attach_m`` of it, else -1.
 
     Every row, from the bottom, in three passes: steps 1, 2 and 5 for every column in vector
     code (:func:`_columns_row`); then the cells that step 3 or 4 asks about, one by one (the set
@@ -268,9 +271,14 @@ def _column_ground(
     nb_band = p[_P_NB_BAND]
     tan_foot = p[_P_TAN_FOOT]
     under = p[_P_UNDER]
+    attach_sq = p[_P_ATTACH_SQ]
     h, w = rho_img.shape
     out = np.zeros((h, w), dtype=np.bool_)
     held = np.zeros((h, w), dtype=np.bool_)
+    # the held cells and their standers, appended branch-free (only the written part is read)
+    cells = np.empty(h * w, dtype=np.int64)
+    standers = np.empty(h * w, dtype=np.int64)
+    n_held = 0
     g_rho = np.full(w, -1.0)  # last ground point of the column (-1: none yet)
     g_z = np.zeros(w)
     g_m = np.zeros(w)  # ground gradient
@@ -415,19 +423,60 @@ def _column_ground(
                     found = False
                     up_r = np.float32(0.0)
                     up_h = np.float32(0.0)
+                    up_row = 0
                     for k in range(1, _FOOT_ROWS + 1):
                         ua = np.uintp(r - k if r >= k else 0)
                         x = rho_img[ua, uq]
                         now = ~found & (r >= k) & (x > 0.0)
                         up_r = x if now else up_r
                         up_h = z_img[ua, uq] if now else up_h
+                        up_row = r - k if now else up_row
                         found |= now
                     d = up_r - rho
                     steep = (d > -under) if d < -_UNDER_MIN_M else (up_h - z > tan_foot * abs(d))
                     stood = found & steep
                     orow[uq] = (rho > 0.0) & hit & ~stood
-                    hrow[uq] = (rho > 0.0) & hit & stood
-    return out, held
+                    hold = (rho > 0.0) & hit & stood
+                    hrow[uq] = hold
+                    # step 8: the cell standing on it, if within attach_m
+                    dz = up_h - z
+                    close = d * d + dz * dz <= attach_sq
+                    cells[n_held] = r * w + q
+                    standers[n_held] = up_row * w + q if close else -1
+                    n_held += hold
+    return out, held, cells[:n_held], standers[:n_held]
+
+
+@njit(cache=True)
+def _attached(
+    cells: np.ndarray,
+    standers: np.ndarray,
+    ground: np.ndarray,
+    held: np.ndarray,
+    counts: np.ndarray,
+    w: int,
+) -> np.ndarray:
+    """Step 8's (K, 3) table (:attr:`flic_cli.range_image.RangeImage.attached`) from the
+    kernel's held cells and their standers (rows from the bottom): a stander that is ground gives
+    none; a held cell standing on a held cell takes that one's target. Walked backwards, the rows
+    come top down, so the target of a held stander (the last held cell seen in its column:
+    nothing valid lies between a cell and its stander) is known when it is read."""
+    k = cells.size
+    out = np.empty((k, 3), dtype=np.int64)
+    last = np.empty(w, dtype=np.int64)  # target of the last held cell seen in every column
+    for j in range(k - 1, -1, -1):
+        p = cells[j]
+        t = standers[j]
+        if t >= 0:
+            if ground[t]:
+                t = -1
+            elif held[t]:
+                t = last[t % w]
+        last[p % w] = t
+        out[k - 1 - j, 0] = p
+        out[k - 1 - j, 1] = t
+        out[k - 1 - j, 2] = counts[p]
+    return out
 
 
 @njit(cache=True)
@@ -527,6 +576,7 @@ def _param_vector(
     neighbour_band_m: float,
     foot_deg: float,
     under_m: float,
+    attach_m: float,
 ) -> np.ndarray:
     """The parameters in the ``_P_*`` layout of :func:`_column_ground` (cached per setting)."""
     p = np.zeros(_P_LEN)
@@ -542,6 +592,7 @@ def _param_vector(
     p[_P_NB_BAND] = neighbour_band_m
     p[_P_TAN_FOOT] = np.tan(np.radians(foot_deg))
     p[_P_UNDER] = under_m
+    p[_P_ATTACH_SQ] = attach_m**2
     p.setflags(write=False)
     return p
 
@@ -598,28 +649,35 @@ class ColumnGround:
 
     def split(
         self, image: RangeImage, points: np.ndarray | None = None
-    ) -> tuple[np.ndarray, np.ndarray | None]:
-        """The ground mask of ``image`` and its held cells (step 8; None without it), both
-        (H, W) bool."""
-        held = np.zeros(image.shape, dtype=np.bool_) if self.hold_feet else None
-        mask = column_ground(
-            image,
-            self.sensor_height_m,
-            self.noise_m,
-            self.slope_change_deg,
-            self.kerb_m,
-            self.max_step_m,
-            self.flat_deg,
-            self.seed_tolerance_m,
-            self.base_band_m,
-            self.neighbour_px,
-            self.neighbour_band_m,
-            self.foot_deg,
-            self.under_m,
-            self.point_heights,
-            held,
+    ) -> tuple[np.ndarray, np.ndarray | None, np.ndarray | None]:
+        """The ground mask of ``image`` (H, W) bool, and by step 8 its held cells (H, W) bool
+        and the cell standing on each, (K, 3) (:attr:`flic_cli.range_image.RangeImage.
+        attached`); None and None without step 8."""
+        params = _param_vector(
+            float(self.sensor_height_m),
+            float(self.noise_m),
+            float(self.slope_change_deg),
+            float(self.kerb_m),
+            float(self.max_step_m),
+            float(self.flat_deg),
+            float(self.seed_tolerance_m),
+            float(self.base_band_m),
+            int(self.neighbour_px),
+            float(self.neighbour_band_m),
+            float(self.foot_deg),
+            float(self.under_m),
+            float(self.attach_m),
         )
-        return mask, held
+        mask, held, cells, standers = _column_ground(
+            *pixel_geometry(image, self.point_heights), params
+        )
+        if not self.hold_feet:
+            return mask, None, None
+        counts = np.ascontiguousarray(image.point_counts(), dtype=np.int32).reshape(-1)
+        attached = _attached(
+            cells, standers, mask.reshape(-1), held.reshape(-1), counts, image.shape[1]
+        )
+        return mask, held, attached
 
     def point_ground(
         self, image: RangeImage, points: np.ndarray, mask: np.ndarray
@@ -704,8 +762,9 @@ def column_ground(
         float(neighbour_band_m),
         float(foot_deg),
         float(under_m),
+        float(ColumnGround.attach_m),
     )
-    mask, stood = _column_ground(*geometry, params)
+    mask, stood, _, _ = _column_ground(*geometry, params)
     if held is not None:
         held[...] = stood
     return mask

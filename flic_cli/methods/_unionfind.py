@@ -430,6 +430,22 @@ def _label_row(
     return cur
 
 
+@njit(cache=True, inline="always")
+def _attach(labels: np.ndarray, size: np.ndarray, attached: np.ndarray) -> None:
+    """Give every held pixel the provisional label of the pixel standing on it and add its
+    points to that label's size (``attached``: (K, 3) held pixel, target pixel or -1, points;
+    see :attr:`flic_cli.range_image.RangeImage.attached`). A held pixel is no node, so it links
+    nothing; a target that is no node gives it none."""
+    for k in range(attached.shape[0]):
+        t = attached[k, 1]
+        if t < 0:
+            continue
+        lab = labels[t]
+        if lab > 0:
+            labels[attached[k, 0]] = lab
+            size[lab] += attached[k, 2]
+
+
 @njit(cache=True)
 def _number(parent: np.ndarray, size: np.ndarray, n_labels: int, min_size: int) -> np.ndarray:
     """Final label of every provisional label (``parent[:n_labels + 1]``, modified).
@@ -470,6 +486,7 @@ def _components(
     min_size: int,
     weights: np.ndarray,
     use_weights: bool,
+    attached: np.ndarray,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Provisional label of every pixel (0 = no node) and the final label of each provisional
     label (0 = dropped); parameters as :func:`connect`."""
@@ -595,6 +612,7 @@ def _components(
                         angles[m, r, 2], angles[m, r, 3], criterion, param,
                     )  # fmt: skip
 
+    _attach(labels, size, attached)
     return labels[:n], _number(parent, size, nl, min_size)
 
 
@@ -633,6 +651,7 @@ def connect(
     min_size: int,
     weights: np.ndarray,
     use_weights: bool,
+    attached: np.ndarray,
 ) -> np.ndarray:
     """Connected components of the range-image graph, small components dropped, per pixel.
 
@@ -654,6 +673,9 @@ def connect(
     weights : (H, W) int32, points per pixel (:meth:`flic_cli.range_image.RangeImage.point_counts`);
         read only when ``use_weights`` (else every pixel counts 1).
     use_weights : whether to read ``weights``.
+    attached : (K, 3) int64, held pixels (left out by ``skip``) that take the component of the
+        pixel standing on them, with their points (:attr:`flic_cli.range_image.RangeImage.
+        attached`; (0, 3) for none).
 
     Returns
     -------
@@ -672,6 +694,7 @@ def connect(
         min_size,
         weights,
         use_weights,
+        attached,
     )
     return pixel_output(labels, final).reshape(ranges.shape)
 
@@ -690,6 +713,7 @@ def connect_points(
     min_size: int,
     weights: np.ndarray,
     use_weights: bool,
+    attached: np.ndarray,
     point_pixel: np.ndarray,
 ) -> np.ndarray:
     """:func:`connect`, but the label of every point: ``labels[point_pixel]`` (0 where
@@ -707,6 +731,7 @@ def connect_points(
         min_size,
         weights,
         use_weights,
+        attached,
     )
     return point_output(labels, final, point_pixel)
 
@@ -715,6 +740,14 @@ def connect_points(
 _ANGLES: dict[tuple, np.ndarray] = {}
 _NO_ARRAY_2D = np.zeros((1, 1), dtype=np.bool_)
 _NO_WEIGHTS = np.zeros((1, 1), dtype=np.int32)
+_NO_ATTACHED = np.zeros((0, 3), dtype=np.int64)
+
+
+def attached_input(attached: np.ndarray | None) -> np.ndarray:
+    """The kernels' ``attached`` argument: (K, 3) contiguous int64, (0, 3) for None."""
+    if attached is None:
+        return _NO_ATTACHED
+    return np.ascontiguousarray(attached, dtype=np.int64).reshape(-1, 3)
 
 
 def cached_angles(
@@ -776,6 +809,7 @@ def run_kernel(
     skip: np.ndarray | None = None,
     weights: np.ndarray | None = None,
     point_pixel: np.ndarray | None = None,
+    attached: np.ndarray | None = None,
 ) -> np.ndarray:
     """Labels per pixel (:func:`connect`) or, given ``point_pixel``, per point
     (:func:`connect_points`).
@@ -790,6 +824,7 @@ def run_kernel(
     skip : (H, W) bool, pixels left out even with a range (ground), or None.
     weights : (H, W) int, points per pixel, or None (1 per pixel).
     point_pixel : (N,) int64 pixel of every point (-1: none), or None for per-pixel labels.
+    attached : (K, 3) held pixels, see :func:`connect`, or None.
     """
     ranges, elevation, skip, use_skip, weights, use_weights = kernel_inputs(
         ranges, elevation, skip, weights
@@ -806,6 +841,7 @@ def run_kernel(
         int(min_size),
         weights,
         use_weights,
+        attached_input(attached),
     )
     if point_pixel is None:
         return connect(*args)

@@ -53,6 +53,7 @@ class Bogoslavskyi:
             ground,
             point_weights(image),
             image.point_pixel,
+            image.attached,
         )
 
 

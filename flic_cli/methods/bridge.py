@@ -57,10 +57,12 @@ from pydantic.dataclasses import dataclass
 from flic_cli.bitwords import pack, trailing_zeros
 from flic_cli.config.component import STRICT
 from flic_cli.methods._unionfind import (
+    _attach,
     _label_row,
     _number,
     _run_buffers,
     _union,
+    attached_input,
     kernel_inputs,
     pixel_output,
     point_output,
@@ -240,9 +242,12 @@ def _bridge_components(
     min_size: int,
     weights: np.ndarray,
     use_weights: bool,
+    attached: np.ndarray,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Provisional label of every pixel (0 = no node) and the final label of each provisional
-    label (0 = dropped): the connected components of the Bridge graph (module docstring).
+    label (0 = dropped): the connected components of the Bridge graph (module docstring); the
+    held pixels of ``attached`` take the label standing on them
+    (:func:`flic_cli.methods._unionfind.connect`).
 
     The first step of every walk (left, up, up-left, up-right) is decided for a whole row at once
     (:func:`_first_steps`: link, stop or go on). The first-step links left and up are FLIC's
@@ -382,6 +387,7 @@ def _bridge_components(
             r, w, on_w, nodes, rf, labels, parent, cos_t, sin_t, threshold, sin_gamma, k_row,
             k_up, walks, link_c, link_q,
         )  # fmt: skip
+    _attach(labels, size, attached)
     return labels[:n], _number(parent, size, np.int64(n_labels), min_size)
 
 
@@ -427,9 +433,11 @@ def run_bridge(
     skip: np.ndarray | None = None,
     weights: np.ndarray | None = None,
     point_pixel: np.ndarray | None = None,
+    attached: np.ndarray | None = None,
 ) -> np.ndarray:
     """Bridge labels per pixel, or per point given ``point_pixel`` (see :func:`bridge_labels`;
-    ``skip``: pixels left out even with a range, e.g. ground)."""
+    ``skip``: pixels left out even with a range, e.g. ground; ``attached``: held pixels, see
+    :func:`flic_cli.methods._unionfind.connect`)."""
     if reach_px < 1:
         raise ValueError(f"reach_px must be >= 1, got {reach_px}")
     ranges, elevation, skip, use_skip, weights, use_weights = kernel_inputs(
@@ -439,6 +447,7 @@ def run_bridge(
     args = (
         ranges, skip, use_skip, cos_t, sin_t, float(threshold_m),
         float(np.sin(np.radians(gamma_deg))), int(reach_px), int(min_size), weights, use_weights,
+        attached_input(attached),
     )  # fmt: skip
     if point_pixel is None:
         return bridge_pixels(*args)
@@ -478,6 +487,7 @@ class Bridge:
             ground,
             point_weights(image),
             image.point_pixel,
+            image.attached,
         )
 
 

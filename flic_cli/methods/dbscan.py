@@ -94,14 +94,28 @@ class Dbscan:
     def segment(
         self, image: RangeImage, points: np.ndarray, ground: np.ndarray | None
     ) -> np.ndarray:
-        keep = image.point_pixel >= 0
+        pix = image.point_pixel
+        keep = pix >= 0
         if ground is not None:
-            keep &= ~ground.reshape(-1)[np.maximum(image.point_pixel, 0)]
+            keep &= ~ground.reshape(-1)[np.maximum(pix, 0)]
         out = np.zeros(points.shape[0], dtype=np.int32)
-        out[keep] = dbscan_labels(
-            points[keep], self.eps_m, self.min_samples, self.min_size, self.backend
-        )
-        return out
+        if image.attached is None or not len(image.attached):
+            out[keep] = dbscan_labels(
+                points[keep], self.eps_m, self.min_samples, self.min_size, self.backend
+            )
+            return out
+        # held pixels (left out by ``ground``): their points take the cluster of a point of the
+        # pixel standing on them and count towards its size
+        out[keep] = dbscan_labels(points[keep], self.eps_m, self.min_samples, 1, self.backend)
+        cell = np.zeros(image.ranges.size, dtype=np.int32)
+        cell[pix[keep]] = out[keep]
+        held, target = image.attached[:, 0], image.attached[:, 1]
+        cell[held] = np.where(target >= 0, cell[np.maximum(target, 0)], 0)
+        is_held = np.zeros(image.ranges.size, dtype=bool)
+        is_held[held] = True
+        moved = (pix >= 0) & is_held[np.maximum(pix, 0)]
+        out[moved] = cell[pix[moved]]
+        return drop_small(out, self.min_size)
 
 
 def dbscan_labels(

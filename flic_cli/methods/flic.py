@@ -133,6 +133,7 @@ class Flic:
                 self.mc_mode,
                 mask,
                 image.point_counts(),
+                image.attached,
             )
             return image.point_labels(labels)
         key = (maps_key(self.maps), self.mc_mode)
@@ -147,6 +148,7 @@ class Flic:
             ground,
             point_weights(image),
             image.point_pixel,
+            image.attached,
         )
 
 
@@ -159,6 +161,7 @@ def flic_labels_scipy(
     mc_mode: str = Flic.mc_mode,
     mask: np.ndarray | None = None,
     weights: np.ndarray | None = None,
+    attached: np.ndarray | None = None,
 ) -> np.ndarray:
     """FLIC the way the paper implements it, with scipy: same result as :func:`flic_labels`.
 
@@ -167,7 +170,8 @@ def flic_labels_scipy(
     with 4-connectivity; the 360 deg seam and every Map Connection then add pairs of direct
     labels, merged by ``scipy.sparse.csgraph.connected_components``. Kept as the reference (the
     tests check the numba kernel against it) and as the paper-style peer in benchmarks
-    (``backend = "scipy"``). Parameters as :func:`flic_labels`.
+    (``backend = "scipy"``). Parameters as :func:`flic_labels`; ``attached``: held pixels, see
+    :func:`flic_cli.methods._unionfind.connect`.
     """
     from scipy import ndimage
     from scipy.sparse import coo_matrix
@@ -227,6 +231,9 @@ def flic_labels_scipy(
     graph = coo_matrix((np.ones(a.size), (a, b)), shape=(n + 1, n + 1))
     _, merged = connected_components(graph, directed=False)
     labels = np.where(flat > 0, merged[flat] + 1, 0)
+    if attached is not None and len(attached):  # held pixels take the label standing on them
+        held, target = attached[:, 0], attached[:, 1]
+        labels[held] = np.where(target >= 0, labels[np.maximum(target, 0)], 0)
     return drop_small(labels, min_size, weights).reshape(h, w)
 
 

@@ -19,7 +19,7 @@ from flic_cli.classes import ground_mask
 from flic_cli.config import Config
 from flic_cli.config.component import check_installed
 from flic_cli.errors import FlicInputError
-from flic_cli.ground.base import Ground, attach_held, extract_ground
+from flic_cli.ground.base import Ground, extract_ground
 from flic_cli.io.base import Frame, FrameRef
 from flic_cli.projection import Projection
 from flic_cli.range_image import RangeImage
@@ -170,18 +170,10 @@ def _in_file(finite: np.ndarray | None, keep: np.ndarray | None) -> np.ndarray |
 
 
 def cluster_ground(method: Any, points: np.ndarray, ground: Ground) -> np.ndarray:
-    """``method``'s per-point labels after a ground step (:func:`extract_ground`).
-
-    With held cells (:attr:`Ground.held`), the clusterer runs without them and without a minimum
-    size, the held cells join the cluster standing on them (:func:`attach_held`), and then the
-    clusters under the method's ``min_size`` are dropped, so that a thing's feet count towards
-    it.
-    """
-    if ground.held is None or not ground.held.any():
-        return method.segment(ground.image, points, ground.mask)
-    every = dataclasses.replace(method, min_size=1)
-    labels = every.segment(ground.image, points, ground.left_out)
-    return attach_held(ground, labels, method.min_size)
+    """``method``'s per-point labels after a ground step (:func:`extract_ground`): on the image
+    it leaves, without its ground and held cells (whose points take the cluster of the cell
+    standing on them, ``ground.image.attached``)."""
+    return method.segment(ground.image, points, ground.left_out)
 
 
 @dataclass(frozen=True)
