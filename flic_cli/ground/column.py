@@ -66,6 +66,19 @@ sensor's own image.
    point itself; :meth:`ColumnGround.point_ground`). The clusterers then leave such points out
    (:func:`flic_cli.ground.base.extract_ground`).
 
+8. **Held feet** (``hold_feet``). The cells step 6 refuses because something stands on them
+   (the foot and under test) lie at the ground's height and range beside the objects: the
+   labels give them to the object or to the ground, and no geometric rule tells which
+   (``results/ground/oracle_counts.csv``). Left to the clusterers, they join parked cars to each
+   other and to their surroundings along the ground, most in clusterers that reach across
+   pixels (FLIC's neighbour reading, Bridge); taken as ground, they take the objects' lowest
+   points, and cars at the minimum size fall under it. So they are *held*: the clusterers leave
+   them out, and their points take the cluster of the cell standing on them (the one the foot
+   test read) if it is within ``attach_m`` of it and not ground, and count towards its minimum
+   size (:attr:`flic_cli.range_image.RangeImage.attached`); a held cell under a held cell takes
+   what that one takes. No held cell links anything. The kernel lists the held cells as step 6
+   finds them; the ground decision and the metrics count them as not ground.
+
 Empty pixels are never ground. Every cell is visited once (a few cells above it are read for
 steps, seeds and the foot test), so the cost is linear in the image size. The image is not
 wrapped at its left and right edges.
@@ -275,9 +288,10 @@ def _column_ground(
     h, w = rho_img.shape
     out = np.zeros((h, w), dtype=np.bool_)
     held = np.zeros((h, w), dtype=np.bool_)
-    # the held cells and their standers, appended branch-free (only the written part is read)
-    cells = np.empty(h * w, dtype=np.int64)
-    standers = np.empty(h * w, dtype=np.int64)
+    # the held cells and their standers, appended branch-free (only the written part is read);
+    # a row appends at most w, so the buffers grow before a row that might not fit
+    cells = np.empty(4 * w, dtype=np.int64)
+    standers = np.empty(4 * w, dtype=np.int64)
     n_held = 0
     g_rho = np.full(w, -1.0)  # last ground point of the column (-1: none yet)
     g_z = np.zeros(w)
@@ -295,6 +309,9 @@ def _column_ground(
         zrow = z_img[r]
         orow = out[r]
         hrow = held[r]
+        if n_held + w > cells.size:
+            cells = np.concatenate((cells, np.empty_like(cells)))
+            standers = np.concatenate((standers, np.empty_like(standers)))
         _columns_row(rrow, zrow, up_rho[r], up_z[r], g_rho, g_z, g_m, last, taken, ask, p)
         pack(ask, ask_w)
         for k in range(nw):
