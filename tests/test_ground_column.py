@@ -754,13 +754,13 @@ def test_held_cells_standing_on_ground_or_held_cells():
     counts = np.array([1, 1, 2, 3, 1], dtype=np.int32)
     cells = np.array([4, 3, 2])
     standers = np.array([3, 2, 1])  # a chain: 4 under 3 under 2, which stands on 1
-    got = _attached(cells, standers, ground, held, counts, 1)
+    got = _attached(cells, standers, ground, held, counts, False, 1)
     assert got.tolist() == [[2, 1, 2], [3, 1, 3], [4, 1, 1]]
     ground[1] = True  # standing on ground: none, down the chain
-    assert _attached(cells, standers, ground, held, counts, 1)[:, 1].tolist() == [-1, -1, -1]
+    assert _attached(cells, standers, ground, held, counts, False, 1)[:, 1].tolist() == [-1, -1, -1]
     ground[1] = False
     standers = np.array([3, -1, 1])  # row 3 too far from row 2: none for rows 3 and 4
-    assert _attached(cells, standers, ground, held, counts, 1)[:, 1].tolist() == [1, -1, -1]
+    assert _attached(cells, standers, ground, held, counts, False, 1)[:, 1].tolist() == [1, -1, -1]
 
 
 def _attached(image: RangeImage, rows: list[tuple[int, int]]) -> RangeImage:

@@ -464,6 +464,9 @@ def _column_ground(
     return out, held, cells[:n_held], standers[:n_held]
 
 
+_ONE = np.ones(1, dtype=np.int32)  # the counts of a sensor's own image (not read)
+
+
 @njit(cache=True)
 def _attached(
     cells: np.ndarray,
@@ -471,6 +474,7 @@ def _attached(
     ground: np.ndarray,
     held: np.ndarray,
     counts: np.ndarray,
+    native: bool,
     w: int,
 ) -> np.ndarray:
     """Step 8's (K, 3) table (:attr:`flic_cli.range_image.RangeImage.attached`) from the
@@ -481,18 +485,24 @@ def _attached(
     k = cells.size
     out = np.empty((k, 3), dtype=np.int64)
     last = np.empty(w, dtype=np.int64)  # target of the last held cell seen in every column
+    inv_w = 1.0 / w
     for j in range(k - 1, -1, -1):
         p = cells[j]
+        # p's column without an integer division (slow next to the rest of this loop)
+        r = np.int64(p * inv_w)
+        r += (r + 1) * w <= p
+        r -= r * w > p
+        c = p - r * w
         t = standers[j]
         if t >= 0:
             if ground[t]:
                 t = -1
             elif held[t]:
-                t = last[t % w]
-        last[p % w] = t
+                t = last[c]  # the stander is in the cell's column
+        last[c] = t
         out[k - 1 - j, 0] = p
         out[k - 1 - j, 1] = t
-        out[k - 1 - j, 2] = counts[p]
+        out[k - 1 - j, 2] = 1 if native else counts[p]
     return out
 
 
@@ -690,10 +700,12 @@ class ColumnGround:
         )
         if not self.hold_feet:
             return mask, None, None
-        counts = np.ascontiguousarray(image.point_counts(), dtype=np.int32).reshape(-1)
+        native = image.projection == "native"  # one point per valid pixel: no counts to read
+        counts = _ONE if native else np.ascontiguousarray(image.point_counts(), dtype=np.int32)
         attached = _attached(
-            cells, standers, mask.reshape(-1), held.reshape(-1), counts, image.shape[1]
-        )
+            cells, standers, mask.reshape(-1), held.reshape(-1), counts.reshape(-1), native,
+            image.shape[1],
+        )  # fmt: skip
         return mask, held, attached
 
     def point_ground(
