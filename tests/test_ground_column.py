@@ -819,6 +819,10 @@ def test_held_points_take_the_cluster_standing_on_them(kitti_root, name):
     assert ground.held.any() and not (ground.held & ground.mask).any()
     attached = ground.image.attached
     assert np.array_equal(np.sort(attached[:, 0]), np.flatnonzero(ground.held))
+    # a held pixel counts the points that stay in it (not those step 7 took as ground)
+    counts = ground.image.point_counts().reshape(-1)
+    assert np.array_equal(attached[:, 2], counts[attached[:, 0]])
+    assert (attached[:, 2] < prep.image.point_counts().reshape(-1)[attached[:, 0]]).any()
     target = np.full(ground.held.size, -1)
     target[attached[:, 0]] = attached[:, 1]
     assert not ground.held.reshape(-1)[attached[attached[:, 1] >= 0, 1]].any()

@@ -116,6 +116,9 @@ def extract_ground(remover: GroundRemover, image: RangeImage, points: np.ndarray
             counts = counts.reshape(image.shape)
             clustered = dataclasses.replace(image, point_pixel=pix, counts=counts)
     if attached is not None and len(attached):
+        if clustered is not image:  # points of held pixels that left them do not count
+            attached = attached.copy()
+            attached[:, 2] = clustered.counts.reshape(-1)[attached[:, 0]]
         clustered = dataclasses.replace(clustered, attached=attached)
     return Ground(mask, clustered, decided, held)
 
