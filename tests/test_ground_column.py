@@ -344,15 +344,23 @@ def test_kernel_equals_the_previous_implementation_on_the_shared_frames(kitti_ro
         assert np.array_equal(got, _reference(image, **kw))
 
 
-@settings(max_examples=60, deadline=None)
-@given(
-    arrays(
-        np.float32, (10, 14), elements=st.sampled_from([0.0, 3.0, 3.1, 4.5, 6.0, 6.2, 9.0, 25.0])
-    )
+#: Random 10 x 14 images of a few ranges (steps, near-equal neighbours, empty cells), the input
+#: of the property tests below
+RANDOM_RANGES = arrays(
+    np.float32, (10, 14), elements=st.sampled_from([0.0, 3.0, 3.1, 4.5, 6.0, 6.2, 9.0, 25.0])
 )
-def test_kernel_equals_the_previous_implementation_on_random_images(ranges):
+
+
+def _random_image(ranges: np.ndarray) -> RangeImage:
+    """A sensor's own image of ``ranges`` with rows from -2 to -24 deg."""
     elevation = np.radians(np.linspace(-2, -24, 10))
-    image = RangeImage(ranges, elevation, np.flatnonzero(ranges.reshape(-1)), "native")
+    return RangeImage(ranges, elevation, np.flatnonzero(ranges.reshape(-1)), "native")
+
+
+@settings(max_examples=60, deadline=None)
+@given(RANDOM_RANGES)
+def test_kernel_equals_the_previous_implementation_on_random_images(ranges):
+    image = _random_image(ranges)
     assert np.array_equal(column_ground(image, neighbour_px=0), _reference(image))
 
 
@@ -441,13 +449,9 @@ def test_step_6_equals_the_plain_reference_on_the_shared_frames(kitti_root, kw):
 
 
 @settings(max_examples=60, deadline=None)
-@given(
-    arrays(np.float32, (10, 14), elements=st.sampled_from([0.0, 3.0, 3.1, 4.5, 6.0, 6.2, 9.0, 25])),
-    st.integers(1, 6),
-)
+@given(RANDOM_RANGES, st.integers(1, 6))
 def test_step_6_equals_the_plain_reference_on_random_images(ranges, nb_px):
-    elevation = np.radians(np.linspace(-2, -24, 10))
-    image = RangeImage(ranges, elevation, np.flatnonzero(ranges.reshape(-1)), "native")
+    image = _random_image(ranges)
     got = column_ground(image, neighbour_px=nb_px, neighbour_band_m=0.5)
     assert np.array_equal(got, _reference_full(image, nb_px=nb_px, nb_band=0.5))
 
@@ -714,15 +718,9 @@ def test_held_cells_are_the_cells_step_6_refuses_on_synthetic_streets():
 
 
 @settings(max_examples=60, deadline=None)
-@given(
-    arrays(
-        np.float32, (10, 14), elements=st.sampled_from([0.0, 3.0, 3.1, 4.5, 6.0, 6.2, 9.0, 25.0])
-    )
-)
+@given(RANDOM_RANGES)
 def test_held_cells_are_the_cells_step_6_refuses_on_random_images(ranges):
-    elevation = np.radians(np.linspace(-2, -24, 10))
-    image = RangeImage(ranges, elevation, np.flatnonzero(ranges.reshape(-1)), "native")
-    _held_property(image, neighbour_band_m=1.0)
+    _held_property(_random_image(ranges), neighbour_band_m=1.0)
 
 
 def _column_image() -> tuple[RangeImage, np.ndarray]:
