@@ -61,9 +61,10 @@ class Ground:
     decided: np.ndarray | None = None
     held: np.ndarray | None = None
 
-    @property
+    @functools.cached_property
     def left_out(self) -> np.ndarray:
-        """(H, W) bool, the pixels the clusterers leave out: ground and held."""
+        """(H, W) bool, the pixels the clusterers leave out: ground and held (computed once per
+        scan, however many clusterers share the ground step)."""
         return self.mask if self.held is None else self.mask | self.held
 
     @property
