@@ -130,7 +130,8 @@ def test_column_is_a_registered_component_with_validated_parameters():
 
 # ---- the previous implementation (flic 4eec351), the reference of the optimised kernel ----------
 # Same steps 1-5, written with per-call trigonometry and a first pass of its own; the optimised
-# kernel must give the same masks with step 6 off (neighbour_px=0).
+# kernel must give the same masks with step 6 off (neighbour_px=0). Its column models and their
+# arithmetic are float32 since the kernel keeps them so (it was float64 at 4eec351).
 
 _BEHIND_M = 0.05  # a cell nearer than the last ground point by more than this is an object
 _GAP_SLOPE_DEG = 5.0  # slope change allowed per metre of gap for a step
@@ -226,13 +227,18 @@ def _ref_column_ground(
         for c in range(w):
             rho_img[r, c] = ranges[r, c] * ce
             z_img[r, c] = ranges[r, c] * se
-    tan_gap = np.tan(np.radians(_GAP_SLOPE_DEG))
-    tan_seed = np.tan(np.radians(_SEED_SLOPE_DEG))
-    max_grad = np.tan(np.radians(_MAX_GRADIENT_DEG))
+    # the column models and their arithmetic in float32, as the kernel keeps them
+    f = np.float32
+    tan_gap = f(np.tan(np.radians(_GAP_SLOPE_DEG)))
+    tan_seed = f(np.tan(np.radians(_SEED_SLOPE_DEG)))
+    max_grad = f(np.tan(np.radians(_MAX_GRADIENT_DEG)))
+    noise32, kerb32, tan_change32 = f(noise), f(kerb), f(tan_change)
+    sensor32, seed_tol32, base_band32, max_step32 = (
+        f(sensor_height), f(seed_tol), f(base_band), f(max_step))  # fmt: skip
     out = np.zeros((h, w), dtype=np.bool_)
-    g_rho = np.full(w, -1.0)  # last ground point of the column (-1: none yet)
-    g_z = np.zeros(w)
-    g_m = np.zeros(w)  # ground gradient
+    g_rho = np.full(w, f(-1.0))  # last ground point of the column (-1: none yet)
+    g_z = np.zeros(w, dtype=np.float32)
+    g_m = np.zeros(w, dtype=np.float32)  # ground gradient
     last = np.zeros(w, dtype=np.bool_)  # the column's previous valid cell was ground
     for r in range(h - 1, -1, -1):
         for c in range(w):
@@ -241,17 +247,17 @@ def _ref_column_ground(
                 continue
             z = z_img[r, c]
             cont = False
-            dr = 0.0
-            e = 0.0
+            dr = f(0.0)
+            e = f(0.0)
             if g_rho[c] >= 0.0:
                 dr = rho - g_rho[c]
-                if dr < -_BEHIND_M:  # 1. in front of the ground: an object
+                if dr < -f(_BEHIND_M):  # 1. in front of the ground: an object
                     last[c] = False
                     continue
                 if dr < 0.0:
-                    dr = 0.0
+                    dr = f(0.0)
                 e = z - (g_z[c] + g_m[c] * dr)
-                band = noise + tan_change * dr
+                band = noise32 + tan_change32 * dr
                 if last[c] and -band <= e <= band:  # 2. continuation
                     ok = True
                     cont = True
@@ -259,31 +265,31 @@ def _ref_column_ground(
                         for ra in range(r - 1, -1, -1):
                             ra_rho = rho_img[ra, c]
                             if ra_rho > 0.0:
-                                stands = abs(ra_rho - rho) < 0.25 * dr
+                                stands = abs(ra_rho - rho) < f(0.25) * dr
                                 if stands and z_img[ra, c] > z:
                                     ok = False
                                 break
                 else:  # 3. step
-                    lim = noise + kerb + tan_gap * dr
-                    if lim > max_step:
-                        lim = max_step
-                    ok = -(noise + kerb + 3.0 * tan_gap * dr) <= e <= lim
+                    lim = noise32 + kerb32 + tan_gap * dr
+                    if lim > max_step32:
+                        lim = max_step32
+                    ok = -(noise32 + kerb32 + f(3.0) * tan_gap * dr) <= e <= lim
                     if ok:
                         s = _ref_surface_above(
                             rho_img, z_img, r, c, rho, z, g_m[c], noise, tan_flat
                         )
-                        ok = s == 1 or (s == 2 and abs(e) <= min(band, base_band))
+                        ok = s == 1 or (s == 2 and abs(e) <= min(band, base_band32))
             else:  # 4. seed
-                e = z + sensor_height
-                lim = seed_tol + tan_seed * rho
+                e = z + sensor32
+                lim = seed_tol32 + tan_seed * rho
                 ok = -lim <= e <= lim
                 if ok:
-                    s = _ref_surface_above(rho_img, z_img, r, c, rho, z, 0.0, noise, tan_flat)
-                    ok = s == 1 or (s == 2 and abs(e) <= base_band)
+                    s = _ref_surface_above(rho_img, z_img, r, c, rho, z, f(0.0), noise, tan_flat)
+                    ok = s == 1 or (s == 2 and abs(e) <= base_band32)
             if ok:
                 if cont:
-                    m = g_m[c] + _GAIN_GRADIENT * e / max(dr, _GAIN_BASE_M)
-                    g_z[c] = g_z[c] + g_m[c] * dr + _GAIN_HEIGHT * e
+                    m = g_m[c] + f(_GAIN_GRADIENT) * e / max(dr, f(_GAIN_BASE_M))
+                    g_z[c] = g_z[c] + g_m[c] * dr + f(_GAIN_HEIGHT) * e
                     g_m[c] = min(max(m, -max_grad), max_grad)
                 else:
                     g_z[c] = z
@@ -293,7 +299,7 @@ def _ref_column_ground(
             else:
                 last[c] = False
                 # 5. base band: ground level just beyond the last ground point
-                if g_rho[c] >= 0.0 and dr < _BASE_DR_M and -base_band <= e <= base_band:
+                if g_rho[c] >= 0.0 and dr < _BASE_DR_M and -base_band32 <= e <= base_band32:
                     out[r, c] = True
     return out
 
