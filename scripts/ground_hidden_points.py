@@ -34,10 +34,17 @@ import pandas as pd
 from flic_cli.classes import GROUND_LUT
 from flic_cli.config import load_config
 from flic_cli.ground import ColumnGround
-from flic_cli.ground.base import Ground, extract_ground, pixel_owners, point_ground
+from flic_cli.ground.base import (
+    Ground,
+    extract_ground,
+    leave_pixels,
+    pixel_owners,
+    point_ground,
+)
 from flic_cli.io import open_dataset
 from flic_cli.io.atomic import write_table
 from flic_cli.metrics import match_objects
+from flic_cli.range_image import RangeImage
 from flic_cli.runs.pipeline import prepare
 
 METHODS = "flic0,flic1,flic6,flic14,flic1n,flic6n,flic14n,bridge,dbscan-fast"
@@ -53,8 +60,10 @@ class _Decided:
     def __call__(self, image: object, points: np.ndarray) -> np.ndarray:
         return self.mask
 
-    def point_ground(self, image: object, points: np.ndarray, mask: np.ndarray) -> np.ndarray:
-        return self.decided
+    def point_ground(
+        self, image: RangeImage, points: np.ndarray, mask: np.ndarray
+    ) -> tuple[np.ndarray, RangeImage]:
+        return self.decided, leave_pixels(image, mask, self.decided)
 
 
 def main() -> None:

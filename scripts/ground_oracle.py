@@ -40,12 +40,13 @@ from numba import njit
 
 from flic_cli.classes import GROUND_LUT, THING_LUT
 from flic_cli.config import load_config
-from flic_cli.ground.base import Ground, extract_ground, pixel_owners
+from flic_cli.ground.base import Ground, extract_ground, leave_pixels, pixel_owners
 from flic_cli.ground.column import pixel_geometry
 from flic_cli.io import open_dataset
 from flic_cli.io.atomic import write_table
 from flic_cli.metrics import match_objects
 from flic_cli.metrics.ground import GroundCounts, ground_counts, ground_scores
+from flic_cli.range_image import RangeImage
 from flic_cli.runs.pipeline import cluster_ground, prepare
 
 CATEGORIES = ("free", "under", "foot", "free-thing", "under-thing", "foot-thing")
@@ -108,8 +109,10 @@ class _Decided:
     def __call__(self, image: object, points: object) -> np.ndarray:
         return self.mask
 
-    def point_ground(self, image: object, points: object, mask: object) -> np.ndarray:
-        return self.on_ground
+    def point_ground(
+        self, image: RangeImage, points: object, mask: np.ndarray
+    ) -> tuple[np.ndarray, RangeImage]:
+        return self.on_ground, leave_pixels(image, mask, self.on_ground)
 
 
 def main() -> None:

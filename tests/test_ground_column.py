@@ -13,6 +13,7 @@ from hypothesis.extra.numpy import arrays
 from numba import njit
 
 from flic_cli.ground import REMOVERS, ColumnGround, column_ground
+from flic_cli.ground.base import leave_pixels
 from flic_cli.io import open_dataset
 from flic_cli.range_image import RangeImage, from_sensor_image
 from flic_cli.sample import HDL64_PITCH_DEG, Box, Cylinder, Ground, Scene, cast, kitti_azimuths
@@ -573,10 +574,14 @@ def _hidden_scan() -> tuple[RangeImage, np.ndarray, np.ndarray]:
 
 def test_step_7_takes_a_hidden_road_point_and_keeps_the_object_and_a_raised_point():
     image, points, mask = _hidden_scan()
-    got = ColumnGround().point_ground(image, points, mask)
+    got, clustered = ColumnGround().point_ground(image, points, mask)
     n = mask.size
     assert got[:n].tolist() == mask.reshape(-1).tolist()  # the pixels' own points
     assert got[n:].tolist() == [True, False]  # the road point behind the object; not 0.5 m up
+    # the image the clusterers see, made in the same pass, is the generic one of that decision
+    want = leave_pixels(image, mask, got)
+    assert np.array_equal(clustered.point_pixel, want.point_pixel)
+    assert np.array_equal(clustered.counts, want.counts)
     # off, or on a sensor's own image (one point per pixel): every point takes its pixel's
     assert ColumnGround(hidden_points=False).point_ground(image, points, mask) is None
     native = RangeImage(image.ranges, image.elevation, np.arange(n), "native")
@@ -584,7 +589,8 @@ def test_step_7_takes_a_hidden_road_point_and_keeps_the_object_and_a_raised_poin
     # the row test: no taken pixel within reach of the point, nothing taken
     far = mask.copy()
     far[1, :] = False
-    assert not ColumnGround().point_ground(image, points, far)[n:].any()
+    got, clustered = ColumnGround().point_ground(image, points, far)
+    assert not got[n:].any() and clustered is image
 
 
 def test_the_clusterers_leave_out_the_points_taken_behind_a_pixel():

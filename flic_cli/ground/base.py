@@ -22,10 +22,13 @@ class GroundRemover(Protocol):
     ``points`` are the (N, 3) points of the evaluated point set, point i in pixel
     ``image.point_pixel[i]``; removers that work on the image alone ignore them.
 
-    A remover may also decide per point (``point_ground(image, points, mask) -> (N,) bool``, or
-    None for its pixels' decision): where a pixel holds several points (a projected scan), those
-    behind the nearest one need not share its decision. Without that method every point takes its
-    pixel's decision (:func:`point_ground`); see :func:`extract_ground`.
+    A remover may also decide per point (``point_ground(image, points, mask) -> (on_ground,
+    clustered)``, or None for its pixels' decision): where a pixel holds several points (a
+    projected scan), those behind the nearest one need not share its decision. ``on_ground`` is
+    the (N,) bool decision, ``clustered`` the image the clusterers see: ``image`` with the points
+    taken as ground whose pixel is not ground left out of their pixels (:func:`leave_pixels`
+    makes it from a decision; a remover may make both in one pass). Without that method every
+    point takes its pixel's decision (:func:`point_ground`); see :func:`extract_ground`.
 
     And a remover may hold cells out of the clustering that it cannot decide on its own
     (``split(image, points) -> (mask, held, attached)``: ``held`` (H, W) bool and ``attached``,
@@ -104,24 +107,36 @@ def extract_ground(remover: GroundRemover, image: RangeImage, points: np.ndarray
     else:
         mask, held, attached = split(image, points)
     decide = getattr(remover, "point_ground", None)
-    decided = None if decide is None else decide(image, points, mask)
-    clustered = image
-    if decided is not None:
-        pix, counts, moved = _leave_pixels(
-            np.ascontiguousarray(image.point_pixel, dtype=np.int64),
-            np.ascontiguousarray(mask, dtype=np.bool_).reshape(-1),
-            decided,
-            np.ascontiguousarray(image.point_counts(), dtype=np.int32).reshape(-1),
-        )
-        if moved:
-            counts = counts.reshape(image.shape)
-            clustered = dataclasses.replace(image, point_pixel=pix, counts=counts)
+    per_point = None if decide is None else decide(image, points, mask)
+    decided, clustered = (None, image) if per_point is None else per_point
     if attached is not None and len(attached):
         if clustered is not image:  # points of held pixels that left them do not count
             attached = attached.copy()
             attached[:, 2] = clustered.counts.reshape(-1)[attached[:, 0]]
         clustered = dataclasses.replace(clustered, attached=attached)
     return Ground(mask, clustered, decided, held)
+
+
+def leave_pixels(image: RangeImage, mask: np.ndarray, on_ground: np.ndarray) -> RangeImage:
+    """The image the clusterers see given a per-point ground decision: ``image`` with the points
+    taken as ground whose pixel is not ``mask`` ground left out of their pixels (``point_pixel``
+    -1, not in the pixel's point count); ``image`` itself where there are none.
+
+    Parameters
+    ----------
+    image : the range image the decision was made on.
+    mask : (H, W) bool, the remover's ground pixels.
+    on_ground : (N,) bool, the remover's decision per point of ``image``.
+    """
+    pix, counts, moved = _leave_pixels(
+        np.ascontiguousarray(image.point_pixel, dtype=np.int64),
+        np.ascontiguousarray(mask, dtype=np.bool_).reshape(-1),
+        np.ascontiguousarray(on_ground, dtype=np.bool_),
+        np.ascontiguousarray(image.point_counts(), dtype=np.int32).reshape(-1),
+    )
+    if not moved:
+        return image
+    return dataclasses.replace(image, point_pixel=pix, counts=counts.reshape(image.shape))
 
 
 def per_sensor(

@@ -89,6 +89,7 @@ shared SemanticKITTI frames and the synthetic sample (``scripts/ground_sweep.py`
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 from collections.abc import Callable
 from typing import Annotated
@@ -529,17 +530,23 @@ def _points_ground(
     exact: bool,
     mask: np.ndarray,
     point_pixel: np.ndarray,
+    counts: np.ndarray,
     xyz: np.ndarray,
     reach: int,
     band: float,
-) -> np.ndarray:
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, bool]:
     """(N,) ground points: those of ground pixels, and by step 7 the points hidden behind their
     pixel's nearest point (farther than the pixel's range, by more than 1 mm) where that pixel
-    is not ground."""
+    is not ground; and, in the same pass, ``point_pixel`` and the (H * W,) ``counts`` without
+    the points step 7 takes (their pixel -1, not counted; :func:`flic_cli.ground.base.
+    leave_pixels`), and whether it took any."""
     h, w = ranges.shape
     flat = mask.reshape(h * w)
     rng = ranges.reshape(h * w)
     out = np.zeros(point_pixel.size, dtype=np.bool_)
+    pix = point_pixel.copy()
+    left = counts.copy()
+    moved = False
     for i in range(point_pixel.size):
         p = point_pixel[i]
         if p < 0:
@@ -562,8 +569,11 @@ def _points_ground(
                 rv, zv = _cell(ranges[r, cc], point_z[r, cc], se, ce, exact)
                 if abs(np.float64(rv) - rho) <= _ROW_DRHO_M and abs(np.float64(zv) - z) <= band:
                     out[i] = True
+                    pix[i] = -1
+                    left[p] -= 1
+                    moved = True
                     break
-    return out
+    return out, pix, left, moved
 
 
 @per_sensor
@@ -724,21 +734,27 @@ class ColumnGround:
 
     def point_ground(
         self, image: RangeImage, points: np.ndarray, mask: np.ndarray
-    ) -> np.ndarray | None:
+    ) -> tuple[np.ndarray, RangeImage] | None:
         """(N,) bool ground points: those of ground pixels, and by step 7 (module docstring)
         the points hidden behind their pixel's nearest point where that pixel is not ground;
-        None (every point takes its pixel's decision) without step 7 or on a sensor's own
-        image, which has no hidden points."""
+        and the image the clusterers see, without the points step 7 takes (made in the same
+        pass; :func:`flic_cli.ground.base.leave_pixels`). None (every point takes its pixel's
+        decision) without step 7 or on a sensor's own image, which has no hidden points."""
         if not self.hidden_points or image.projection == "native":
             return None
-        return _points_ground(
+        on_ground, pix, counts, moved = _points_ground(
             *_cell_inputs(image, self.point_heights),
             np.ascontiguousarray(mask, dtype=np.bool_),
             np.ascontiguousarray(image.point_pixel, dtype=np.int64),
+            np.ascontiguousarray(image.point_counts(), dtype=np.int32).reshape(-1),
             np.ascontiguousarray(points),
             int(self.neighbour_px),
             float(self.neighbour_band_m),
         )
+        if not moved:
+            return on_ground, image
+        clustered = dataclasses.replace(image, point_pixel=pix, counts=counts.reshape(image.shape))
+        return on_ground, clustered
 
 
 def column_ground(
