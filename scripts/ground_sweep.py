@@ -54,6 +54,7 @@ GRID: dict[str, list[float]] = {
     "neighbour_band_m": [0.02, 0.03, 0.05, 0.08, 0.12],
     "foot_deg": [15.0, 20.0, 30.0, 45.0, 60.0],
     "under_m": [0.0, 0.5, 1.0, 2.0, 3.0, 5.0],
+    "face_deg": [15.0, 20.0, 30.0, 45.0, 60.0, 90.0],
     # the pixels' geometry on projected scans, and step 7 (hidden points)
     "point_heights": [False, True],
     "hidden_points": [False, True],

@@ -375,13 +375,15 @@ def test_kernel_equals_the_previous_implementation_on_random_images(ranges):
 
 
 @njit(cache=True)
-def _ref_row_neighbours(ranges, sin_el, cos_el, cols, nb_px, nb_band, tan_foot, under):
+def _ref_row_neighbours(ranges, sin_el, cos_el, cols, nb_px, nb_band, tan_foot, under, tan_face):
     """Step 6 cell by cell on top of the columns' mask ``cols``: the nearest cell of ``cols`` on
     each side within ``nb_px`` columns at the same range (1 m) and height (``nb_band``), unless
-    the next valid cell above (2 rows) is a foot's or a near occluder's."""
+    the next valid cell above (2 rows) is a foot's or a near occluder's, or the next valid cell
+    below (2 rows) is not ground and lies under the cell's face. Rows from the bottom up: the
+    face test reads the final decision of the rows below."""
     h, w = ranges.shape
     out = cols.copy()
-    for r in range(h):
+    for r in range(h - 1, -1, -1):
         se = np.float32(sin_el[r])
         ce = np.float32(cos_el[r])
         for c in range(w):
@@ -410,21 +412,35 @@ def _ref_row_neighbours(ranges, sin_el, cos_el, cols, nb_px, nb_band, tan_foot, 
                     else:
                         stood = ranges[ra, c] * np.float32(sin_el[ra]) - z > tan_foot * abs(d)
                     break
-            out[r, c] = not stood
+            face = False
+            for rb in range(r + 1, min(r + 3, h)):
+                rb_rho = ranges[rb, c] * np.float32(cos_el[rb])
+                if rb_rho > 0.0:
+                    rb_z = ranges[rb, c] * np.float32(sin_el[rb])
+                    face = not out[rb, c] and z - rb_z > tan_face * abs(rho - rb_rho)
+                    break
+            out[r, c] = not stood and not face
     return out
 
 
-def _reference_full(image: RangeImage, nb_px=10, nb_band=0.08, foot_deg=30.0, under=2.0, **kw):
+def _reference_full(
+    image: RangeImage, nb_px=10, nb_band=0.08, foot_deg=30.0, under=2.0, face_deg=30.0, **kw
+):
     el = np.asarray(image.elevation, dtype=np.float64)
     ranges = np.ascontiguousarray(image.ranges, dtype=np.float32)
     cols = _reference(image, **kw)
     tan_foot = float(np.tan(np.radians(foot_deg)))
+    tan_face = float(np.tan(np.radians(face_deg))) if face_deg < 90 else np.inf
     return _ref_row_neighbours(
-        ranges, np.sin(el), np.cos(el), cols, nb_px, nb_band, tan_foot, under
+        ranges, np.sin(el), np.cos(el), cols, nb_px, nb_band, tan_foot, under, tan_face
     )
 
 
-STEP6 = [{}, {"nb_px": 3, "nb_band": 0.03, "under": 0.0}, {"nb_px": 40, "foot_deg": 60.0}]
+STEP6 = [
+    {},
+    {"nb_px": 3, "nb_band": 0.03, "under": 0.0, "face_deg": 90.0},
+    {"nb_px": 40, "foot_deg": 60.0, "face_deg": 15.0},
+]
 
 
 def _kw6(kw):
@@ -528,6 +544,24 @@ def test_row_neighbours_keep_the_foot_of_what_stands_on_the_cell():
     image = _image_of(rho, z)
     assert not column_ground(image)[2, 15:21].any()  # a foot at foot_deg 30
     assert column_ground(image, foot_deg=85.0)[2, 15:21].all()  # not steep enough for 85 deg
+
+
+def test_row_neighbours_do_not_carry_the_ground_along_the_face_of_an_object():
+    # columns 15-20: rows 3 and 2 hit the vertical side of an object 10 m out, its top row at
+    # the road's height beside it (10.2 m out in row 2), with far background above it (the top
+    # outline of a car's side: no foot above it, so only the cell below shows the face)
+    rho, z = _road_rows()
+    el = np.arctan2(-H_S, ROW_DIST)
+    for r, d in ((3, 10.0), (2, 10.0), (1, 30.0), (0, 30.0)):
+        rho[r, 15:21] = d
+        z[r, 15:21] = d * np.tan(el[r])
+    image = _image_of(rho, z)
+    assert abs(z[2, 15] - z[2, 14]) < 0.08 and abs(rho[2, 15] - rho[2, 14]) < 1.0  # a row hit
+    assert not column_ground(image, neighbour_px=0)[2, 15:21].any()  # the columns refuse it
+    mask, held = _held(image)
+    assert not mask[2, 15:21].any() and not held[2, 15:21].any()  # on a face: an object's
+    assert mask[2, :15].all() and mask[2, 21:].all()
+    assert column_ground(image, face_deg=90.0)[2, 15:21].all()  # without the face test: ground
 
 
 def test_row_neighbours_keep_ground_under_a_near_occluder():
@@ -713,7 +747,9 @@ def test_the_foot_of_what_stands_on_the_ground_is_held_not_taken():
 
 
 def _held_property(image: RangeImage, **kw) -> None:
-    """Held cells are exactly what step 6 takes once the foot and under test is off."""
+    """Held cells are exactly what step 6 takes once the foot and under test is off (the face
+    test, which reads the decision of the rows below, off in both)."""
+    kw = {"face_deg": 90.0, **kw}
     mask, held = _held(image, **kw)
     off = column_ground(image, **{**kw, "foot_deg": 89.999, "under_m": 0.0})
     assert not (mask & held).any()
