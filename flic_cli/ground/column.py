@@ -286,7 +286,8 @@ def _column_ground(
     Every row, from the bottom, in three passes: steps 1, 2 and 5 for every column in vector
     code (:func:`_columns_row`); then the cells that step 3 or 4 asks about, one by one (the set
     bits of their packed flags), where the cells above decide; then step 6 on the gaps between
-    consecutive cells taken so far (from the flips of the packed taken flags). The columns are
+    consecutive cells taken so far (from the flips of the packed taken flags): the row test for
+    every cell of a gap, the foot and face tests for the cells it hits. The columns are
     independent within a row, so the order of the passes does not change the mask
     (tests/test_ground_column.py pins it against the rule written cell by cell). The tests on
     the cells above are written out here rather than called as helpers: numba passes the images
