@@ -12,10 +12,11 @@ the hidden points (those that are not the nearest of their pixel) are decided:
 - ``labels on hidden points``: by their ground-truth label (a bound: no remover knows it);
 - ``step 7``: by ``column``'s step 7 (its default).
 
-Every variant goes through :func:`flic_cli.ground.base.extract_ground`, as ``flic evaluate``
-does: the points taken as ground outside ground pixels leave their pixel, so every clusterer
-leaves them out. ``column`` runs without step 8 (``hold_feet = false``), so that only the hidden
-points' decision differs between the variants.
+Every variant is a :class:`flic_cli.ground.base.Ground`, as ``flic evaluate`` makes it
+(``extract_ground``; the labels' variant from its decision with ``leave_pixels``): the points
+taken as ground outside ground pixels leave their pixel, so every clusterer leaves them out.
+``column`` runs without step 8 (``hold_feet = false``), so that only the hidden points'
+decision differs between the variants.
 
 Usage::
 
@@ -44,26 +45,9 @@ from flic_cli.ground.base import (
 from flic_cli.io import open_dataset
 from flic_cli.io.atomic import write_table
 from flic_cli.metrics import match_objects
-from flic_cli.range_image import RangeImage
 from flic_cli.runs.pipeline import prepare
 
 METHODS = "flic0,flic1,flic6,flic14,flic1n,flic6n,flic14n,bridge,dbscan-fast"
-
-
-class _Decided:
-    """A remover that gives a fixed mask and a fixed decision per point."""
-
-    def __init__(self, mask: np.ndarray, decided: np.ndarray) -> None:
-        self.mask = mask
-        self.decided = decided
-
-    def __call__(self, image: object, points: np.ndarray) -> np.ndarray:
-        return self.mask
-
-    def point_ground(
-        self, image: RangeImage, points: np.ndarray, mask: np.ndarray
-    ) -> tuple[np.ndarray, RangeImage]:
-        return self.decided, leave_pixels(image, mask, self.decided)
 
 
 def main() -> None:
@@ -95,7 +79,7 @@ def main() -> None:
         labels = np.where(hidden, GROUND_LUT[g.labels & 0xFFFF], point_ground(img, mask))
         variants: dict[str, Ground] = {
             "pixel": extract_ground(pixel_only, img, g.points),
-            "labels on hidden points": extract_ground(_Decided(mask, labels), img, g.points),
+            "labels on hidden points": Ground(mask, leave_pixels(img, mask, labels), labels),
             "step 7": extract_ground(column, img, g.points),
         }
         frames.append((g, n, variants))

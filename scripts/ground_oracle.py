@@ -46,7 +46,6 @@ from flic_cli.io import open_dataset
 from flic_cli.io.atomic import write_table
 from flic_cli.metrics import match_objects
 from flic_cli.metrics.ground import GroundCounts, ground_counts, ground_scores
-from flic_cli.range_image import RangeImage
 from flic_cli.runs.pipeline import cluster_ground, prepare
 
 CATEGORIES = ("free", "under", "foot", "free-thing", "under-thing", "foot-thing")
@@ -99,22 +98,6 @@ def row_height(rho: np.ndarray, z: np.ndarray, taken: np.ndarray) -> np.ndarray:
     return out
 
 
-class _Decided:
-    """A remover that returns a given pixel mask and per-point decision (for
-    :func:`extract_ground`)."""
-
-    def __init__(self, mask: np.ndarray, on_ground: np.ndarray) -> None:
-        self.mask, self.on_ground = mask, on_ground
-
-    def __call__(self, image: object, points: object) -> np.ndarray:
-        return self.mask
-
-    def point_ground(
-        self, image: RangeImage, points: object, mask: np.ndarray
-    ) -> tuple[np.ndarray, RangeImage]:
-        return self.on_ground, leave_pixels(image, mask, self.on_ground)
-
-
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("data", type=Path)
@@ -150,7 +133,7 @@ def main() -> None:
         other_feet = (cat == 1) | (cat == 2)
         col = column(img)
         on_ground = GROUND_LUT[g.labels & 0xFFFF]
-        grounds["labels, per point"].append(extract_ground(_Decided(gr, on_ground), img, g.points))
+        grounds["labels, per point"].append(Ground(gr, leave_pixels(img, gr, on_ground), on_ground))
         for name, mask in (
             ("labels", gr),
             ("labels - thing feet", gr & ~thing_feet),

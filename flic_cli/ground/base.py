@@ -134,9 +134,18 @@ def leave_pixels(image: RangeImage, mask: np.ndarray, on_ground: np.ndarray) -> 
         np.ascontiguousarray(on_ground, dtype=np.bool_),
         np.ascontiguousarray(image.point_counts(), dtype=np.int32).reshape(-1),
     )
+    return points_left(image, pix, counts, moved)
+
+
+def points_left(
+    image: RangeImage, point_pixel: np.ndarray, counts: np.ndarray, moved: bool
+) -> RangeImage:
+    """``image`` with the point-to-pixel map and the (H * W,) point counts of a per-point
+    decision that left points out of their pixels; ``image`` itself where none left
+    (``moved`` False)."""
     if not moved:
         return image
-    return dataclasses.replace(image, point_pixel=pix, counts=counts.reshape(image.shape))
+    return dataclasses.replace(image, point_pixel=point_pixel, counts=counts.reshape(image.shape))
 
 
 def per_sensor(

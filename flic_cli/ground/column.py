@@ -94,7 +94,6 @@ shared SemanticKITTI frames and the synthetic sample (``scripts/ground_sweep.py`
 
 from __future__ import annotations
 
-import dataclasses
 import functools
 from collections.abc import Callable
 from typing import Annotated
@@ -106,7 +105,7 @@ from pydantic.dataclasses import dataclass
 
 from flic_cli.bitwords import pack, trailing_zeros
 from flic_cli.config.component import STRICT
-from flic_cli.ground.base import per_sensor
+from flic_cli.ground.base import per_sensor, points_left
 from flic_cli.range_image import RangeImage
 
 # Fixed constants of the algorithm (see the module docstring), with the values the sweep chose.
@@ -788,10 +787,7 @@ class ColumnGround:
             int(self.neighbour_px),
             float(self.neighbour_band_m),
         )
-        if not moved:
-            return on_ground, image
-        clustered = dataclasses.replace(image, point_pixel=pix, counts=counts.reshape(image.shape))
-        return on_ground, clustered
+        return on_ground, points_left(image, pix, counts, moved)
 
 
 def column_ground(
