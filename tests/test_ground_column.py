@@ -627,6 +627,82 @@ def test_step_7_takes_a_hidden_road_point_and_keeps_the_object_and_a_raised_poin
     assert not got[n:].any() and clustered is image
 
 
+def _step_7_reference(
+    image: RangeImage, points: np.ndarray, mask: np.ndarray, reach: int = 10, band: float = 0.08
+) -> np.ndarray:
+    """Step 7 as the module docstring states it, point by point: a point takes its pixel's
+    decision, unless it lies more than 1 mm behind its pixel's range in a pixel not ground and a
+    ground pixel of its row at most ``reach`` columns away is within 1 m of its horizontal range
+    and ``band`` of its height (that pixel's geometry as :func:`pixel_geometry` gives it)."""
+    from flic_cli.ground.column import pixel_geometry
+
+    rho_img, z_img, _, _ = pixel_geometry(image)
+    w = image.shape[1]
+    pix = image.point_pixel
+    flat = mask.reshape(-1)
+    out = np.zeros(pix.size, dtype=bool)
+    has = pix >= 0
+    out[has] = flat[pix[has]]
+    xyz = points[:, :3].astype(np.float64)
+    dist = np.sqrt((xyz**2).sum(axis=1))
+    rng = image.ranges.reshape(-1).astype(np.float64)
+    for i in np.flatnonzero(has & ~out):
+        p = pix[i]
+        if dist[i] <= rng[p] + 1e-3:
+            continue
+        r, c = divmod(int(p), w)
+        cols = slice(max(c - reach, 0), c + reach + 1)
+        rho = np.hypot(xyz[i, 0], xyz[i, 1])
+        near = (np.abs(rho_img[r, cols] - rho) <= 1.0) & (
+            np.abs(z_img[r, cols] - xyz[i, 2]) <= band
+        )
+        out[i] = bool((mask[r, cols] & near).any())
+    return out
+
+
+def _check_step_7(image: RangeImage, points: np.ndarray, mask: np.ndarray) -> None:
+    """``ColumnGround.point_ground`` equals the reference, and the image it returns is the
+    generic one of its decision (:func:`leave_pixels`)."""
+    got, clustered = ColumnGround().point_ground(image, points, mask)
+    assert np.array_equal(got, _step_7_reference(image, points, mask))
+    want = leave_pixels(image, mask, got)
+    assert np.array_equal(clustered.point_pixel, want.point_pixel)
+    assert np.array_equal(clustered.point_counts(), want.point_counts())
+
+
+def test_step_7_equals_the_plain_reference_on_the_shared_frames(kitti_root):
+    from flic_cli.config import load_config
+    from flic_cli.runs.pipeline import prepare
+
+    cfg = load_config()
+    ds = open_dataset(kitti_root)
+    for ref in ds.refs()[1::12]:
+        prep = prepare(ds.load(ref), "ground", cfg.projection)
+        _check_step_7(prep.image, prep.points, ColumnGround()(prep.image, prep.points))
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.integers(0, 2**32 - 1))
+def test_step_7_equals_the_plain_reference_on_random_scans(seed):
+    """Random points at a few ranges and heights, in 6 spherical bins x 64 columns, so that most
+    pixels hold several points and some points fall outside the field of view (no pixel); with a
+    random mask, and with the column remover's own (the projected scans of the shared frames,
+    ring projection, are the test above)."""
+    from flic_cli.projection import project_points
+
+    rng = np.random.default_rng(seed)
+    n = int(rng.integers(50, 3000))
+    az = rng.uniform(-np.pi, np.pi, n)
+    rho = rng.choice([4.0, 4.5, 8.0, 8.3, 20.0], n) + rng.normal(0.0, 0.3, n)
+    z = rng.choice([-H_S, -H_S + 0.05, -1.0, 0.5], n) + rng.normal(0.0, 0.02, n)
+    pts = np.stack([rho * np.cos(az), rho * np.sin(az), z], axis=1).astype(np.float32)
+    image = project_points(
+        pts, width=64, mode="spherical", rows=6, fov_up_deg=5.0, fov_down_deg=-20.0
+    )
+    _check_step_7(image, pts, rng.random(image.shape) < 0.5)
+    _check_step_7(image, pts, ColumnGround()(image, pts))
+
+
 def test_the_clusterers_leave_out_the_points_taken_behind_a_pixel():
     from flic_cli.ground.base import extract_ground
     from flic_cli.methods.dbscan import Dbscan
