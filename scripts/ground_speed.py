@@ -15,6 +15,12 @@ or ``NAME@REV``: the remover ``NAME`` with its defaults as it was at git revisio
 module ``flic_cli/ground/NAME.py`` of that revision, loaded beside the working tree's); the
 table then says on how many frames its masks differ from those of the working tree's ``NAME``.
 
+``--per-point`` times what the ground table times instead of the mask call:
+:func:`flic_cli.ground.base.extract_ground`, the remover with its per-point decision (step 7 of
+``column``) and the image the clusterers see; ``NAME@REV`` is then the remover's class at that
+revision, with its defaults, and the table says on how many frames its per-point decision or its
+point map differs.
+
 ``--instructions`` counts instead of timing (deterministic, whatever the machine's load): for
 every remover it runs this script under ``valgrind --tool=callgrind`` with instrumentation off,
 switches it on (``callgrind_control -i on``) once the remover is compiled and warm, and divides
@@ -29,12 +35,15 @@ Usage::
     python scripts/ground_speed.py /tmp/s/moosmann \\
         --removers column-previous,column,column:neighbour_px=0 --instructions --rounds 2
     python scripts/ground_speed.py /tmp/kitti-log --removers column@a57d9e3~1,column --rounds 5
+    python scripts/ground_speed.py ../shared/data/semantickitti --removers column@HEAD~1,column \\
+        --per-point --rounds 5
 """
 
 from __future__ import annotations
 
 import argparse
 import ast
+import functools
 import importlib.util
 import os
 import re
@@ -48,6 +57,7 @@ import numpy as np
 import pandas as pd
 
 from flic_cli.config import load_config
+from flic_cli.ground.base import extract_ground
 from flic_cli.io import open_dataset
 from flic_cli.io.atomic import write_table
 from flic_cli.runs.pipeline import prepare
@@ -67,9 +77,9 @@ def previous_column():
     return lambda image, points=None: mod._reference(image)
 
 
-def remover_at(name: str, rev: str):
-    """The remover ``name`` with its defaults (its module's ``NAME_ground``) at git revision
-    ``rev``."""
+def remover_at(cfg, name: str, rev: str, per_point: bool = False):
+    """The remover ``name`` with its defaults at git revision ``rev``: its module's
+    ``NAME_ground`` (the mask), or with ``per_point`` its class (as ``extract_ground`` runs it)."""
     src = subprocess.run(
         ["git", "-C", str(ROOT), "show", f"{rev}:flic_cli/ground/{name}.py"],
         capture_output=True, text=True, check=True,
@@ -82,22 +92,36 @@ def remover_at(name: str, rev: str):
     mod = importlib.util.module_from_spec(spec)
     sys.modules[module] = mod
     spec.loader.exec_module(mod)
+    if per_point:
+        return getattr(mod, type(cfg.remover(name)).__name__)()
     return lambda image, points=None: getattr(mod, f"{name}_ground")(image)
 
 
-def make_remover(cfg, spec: str):
+def make_remover(cfg, spec: str, per_point: bool = False):
     """A remover from ``NAME``, ``NAME:param=value,...`` or ``NAME@REV`` (see the module
     docstring)."""
     if spec == "column-previous":
         return previous_column()
     if "@" in spec:
-        return remover_at(*spec.split("@", 1))
+        return remover_at(cfg, *spec.split("@", 1), per_point=per_point)
     name, _, params = spec.partition(":")
     remover = cfg.remover(name)
     if params:
         kw = {k: ast.literal_eval(v) for k, v in (p.split("=") for p in params.split(";"))}
         remover = type(remover)(**{**remover.__dict__, **kw})
     return remover
+
+
+def _same(a, b) -> bool:
+    """Whether two masks, or two ground steps' decisions and point maps, are equal."""
+    if isinstance(a, np.ndarray):
+        return np.array_equal(a, b)
+    return (
+        np.array_equal(a.mask, b.mask)
+        and np.array_equal(a.on_ground, b.on_ground)
+        and np.array_equal(a.image.point_pixel, b.image.point_pixel)
+        and np.array_equal(a.image.point_counts(), b.image.point_counts())
+    )
 
 
 def load_frames(data: Path, cfg, limit: int | None) -> list:
@@ -162,6 +186,9 @@ def main() -> None:
     parser.add_argument("--rounds", type=int, default=5)
     parser.add_argument("--frames", type=int, default=None, help="first N frames only")
     parser.add_argument("--instructions", action="store_true", help="count under callgrind")
+    parser.add_argument(
+        "--per-point", action="store_true", help="time extract_ground (with per-point decisions)"
+    )
     parser.add_argument("--out", type=Path, default=None)
     parser.add_argument("--child", default=None, help=argparse.SUPPRESS)
     parser.add_argument("--go", default=None, help=argparse.SUPPRESS)
@@ -176,15 +203,21 @@ def main() -> None:
     else:
         cfg = load_config()
         frames = load_frames(args.data, cfg, args.frames)
-        removers = {n: make_remover(cfg, n) for n in names}
-        for remover in removers.values():  # warm-up: JIT compilation or cache load
-            remover(frames[0].image, frames[0].points)
+        removers = {n: make_remover(cfg, n, args.per_point) for n in names}
+        if args.per_point:
+            calls = {n: functools.partial(extract_ground, r) for n, r in removers.items()}
+        else:
+            calls = removers
+        for call in calls.values():  # warm-up: JIT compilation or cache load
+            call(frames[0].image, frames[0].points)
         differ = {}
-        for n in names:  # an old revision's masks against the working tree's
+        for n in names:  # an old revision's masks (or decisions) against the working tree's
             if "@" in n:
                 current = cfg.remover(n.split("@")[0])
+                if args.per_point:
+                    current = functools.partial(extract_ground, current)
                 differ[n] = sum(
-                    not np.array_equal(removers[n](p.image, p.points), current(p.image, p.points))
+                    not _same(calls[n](p.image, p.points), current(p.image, p.points))
                     for p in frames
                 )
         times: dict[str, list[float]] = {n: [] for n in names}
@@ -192,7 +225,7 @@ def main() -> None:
 
         gc.collect()
         gc.disable()
-        order = list(removers.items())
+        order = list(calls.items())
         for k in range(args.rounds):
             for i, prep in enumerate(frames):
                 # the order turns from frame to frame: the first remover after a new frame
