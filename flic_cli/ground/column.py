@@ -567,49 +567,30 @@ def _points_ground(
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, bool]:
     """(N,) ground points: those of ground pixels, and by step 7 the points hidden behind their
     pixel's nearest point (farther than the pixel's range, by more than 1 mm) where that pixel
-    is not ground; and, in the same call, ``point_pixel`` and the (H * W,) ``counts`` without
+    is not ground; and, in the same pass, ``point_pixel`` and the (H * W,) ``counts`` without
     the points step 7 takes (their pixel -1, not counted; :func:`flic_cli.ground.base.
-    leave_pixels`), and whether it took any.
-
-    The call is bound by memory traffic (a KITTI scan's 120k points: their pixels, 1 MB, read
-    and written once), so it makes three passes over as few bytes as it can: every pixel gets a
-    byte saying whether it is ground and whether it is a pixel not ground that holds several
-    points (only such a pixel has hidden points); every point takes its pixel's decision, its
-    pixel goes into the map the clusterers see, and a point of a pixel with several points is
-    listed (on the shared KITTI frames 8 % of the points); only the listed points are tested
-    for being hidden (their range) and, if hidden, against the taken pixels of their row."""
+    leave_pixels`), and whether it took any."""
     h, w = ranges.shape
-    n_px = h * w
-    flat = mask.reshape(n_px)
-    rng = ranges.reshape(n_px)
-    one = np.uint8(1)
-    code = np.empty(n_px, dtype=np.uint8)  # bit 0: ground; bit 1: not ground, several points
-    for k in range(n_px):
-        g = flat[k]
-        code[k] = np.uint8(g) | (np.uint8(~g & (counts[k] > 1)) << one)
-    n = point_pixel.size
-    out = np.empty(n, dtype=np.bool_)
-    pix = np.empty(n, dtype=np.int64)
-    listed = np.empty(n, dtype=np.int32)  # the points of such pixels; then those step 7 takes
-    n_listed = 0
-    for i in range(n):
+    flat = mask.reshape(h * w)
+    rng = ranges.reshape(h * w)
+    out = np.zeros(point_pixel.size, dtype=np.bool_)
+    pix = point_pixel.copy()
+    left = counts.copy()
+    moved = False
+    for i in range(point_pixel.size):
         p = point_pixel[i]
-        pix[i] = p
-        cd = code[p] if p >= 0 else np.uint8(0)
-        out[i] = (cd & one) != 0
-        listed[n_listed] = i
-        n_listed += cd >> one
-    n_taken = 0
-    for j in range(n_listed):
-        i = listed[j]
-        p = point_pixel[i]
+        if p < 0:
+            continue
+        if flat[p]:
+            out[i] = True
+            continue
         x = np.float64(xyz[i, 0])
         y = np.float64(xyz[i, 1])
         z = np.float64(xyz[i, 2])
         if np.sqrt(x * x + y * y + z * z) <= np.float64(rng[p]) + _HIDDEN_M:
             continue  # the pixel's nearest point (or as near)
         r = p // w
-        c = p - r * w
+        c = p % w
         rho = np.sqrt(x * x + y * y)
         se = sin_el[r]
         ce = cos_el[r]
@@ -618,15 +599,11 @@ def _points_ground(
                 rv, zv = _cell(ranges[r, cc], point_z[r, cc], se, ce, exact)
                 if abs(np.float64(rv) - rho) <= _ROW_DRHO_M and abs(np.float64(zv) - z) <= band:
                     out[i] = True
-                    listed[n_taken] = i  # n_taken <= j: an entry already read
-                    n_taken += 1
+                    pix[i] = -1
+                    left[p] -= 1
+                    moved = True
                     break
-    left = counts.copy()
-    for j in range(n_taken):
-        i = listed[j]
-        left[pix[i]] -= 1
-        pix[i] = -1
-    return out, pix, left, n_taken > 0
+    return out, pix, left, moved
 
 
 @per_sensor
