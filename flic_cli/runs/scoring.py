@@ -30,7 +30,9 @@ from flic_cli.runs.pipeline import (
     Segmenter,
     prepare,
     prepare_semantic,
+    prepared_semantics,
     scan_semantics,
+    segment_with,
 )
 
 #: Columns of the per-object records (``per_object.csv``).
@@ -163,10 +165,11 @@ class ScoreJob:
         for setting, segmenters in self.segmenters:
             prep = prepare(frame, setting, self.projection)
             grounds = GroundCache(prep)
+            classes = prepared_semantics(prep)  # the ground truth's, for methods that need them
             for seg in segmenters:
                 ground, ground_seconds = grounds.get(seg)
                 start = time.perf_counter()
-                labels = seg.cluster(prep.image, prep.points, ground)
+                labels = seg.cluster(prep.image, prep.points, ground, classes)
                 seconds = time.perf_counter() - start + ground_seconds
                 add_scores(out, seg.name, setting, prep, labels, seconds, ground_seconds)
             grounds.add_records(out)
@@ -192,7 +195,9 @@ def oracle_panoptic(
     prep = prepare_semantic(frame, semantics, projection)
     rows: dict[str, list] = {c: [] for c in PANOPTIC_COLUMNS}
     for seg in segmenters:
-        labels = seg.method.segment(prep.image, prep.points, None)
+        labels = segment_with(
+            seg.method, prep.image, prep.points, None, prepared_semantics(prep, semantics)
+        )
         counts = panoptic_counts(gt, combine(semantics, prep.scan_labels(labels)))
         n = len(counts)
         rows["method"] += [seg.name] * n

@@ -37,7 +37,9 @@ from flic_cli.runs.pipeline import (
     build_segmenter,
     prepare,
     prepare_semantic,
+    prepared_semantics,
     scan_semantics,
+    segment_with,
 )
 
 #: ``--semantics`` values besides a folder of a semantic network's predictions.
@@ -98,7 +100,10 @@ class SegmentJob:
             return Segmented(prep, labels, ground)
         semantics = scan_semantics(frame, self.semantics)
         prep = prepare_semantic(frame, semantics, self.projection)
-        labels = self.segmenter.method.segment(prep.image, prep.points, None)
+        labels = segment_with(
+            self.segmenter.method, prep.image, prep.points, None,
+            prepared_semantics(prep, semantics),
+        )  # fmt: skip
         return Segmented(prep, labels, None, semantics)
 
 

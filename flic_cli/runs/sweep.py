@@ -23,7 +23,13 @@ from flic_cli.projection import Projection
 from flic_cli.runs.evaluate import select_labelled
 from flic_cli.runs.frames import FrameLoop, Skipped, sort_skipped, write_skipped
 from flic_cli.runs.output import check_output_dir
-from flic_cli.runs.pipeline import Segmenter, build_segmenter, check_setting, prepare
+from flic_cli.runs.pipeline import (
+    Segmenter,
+    build_segmenter,
+    check_setting,
+    prepare,
+    prepared_semantics,
+)
 from flic_cli.runs.scoring import load_labelled_frame
 from flic_cli.runs.tables import percent
 
@@ -91,8 +97,9 @@ class SweepJob:
     def __call__(self, ref: FrameRef) -> np.ndarray:
         prep = prepare(load_labelled_frame(ref), self.setting, self.projection)
         ground = self.segmenters[0].ground_step(prep.image, prep.points)
+        classes = prepared_semantics(prep)  # the ground truth's, for methods that need them
         rows = [
-            match_objects(prep.labels, s.cluster(prep.image, prep.points, ground)).iou
+            match_objects(prep.labels, s.cluster(prep.image, prep.points, ground, classes)).iou
             for s in self.segmenters
         ]
         return np.vstack(rows) if rows else np.zeros((0, 0))
@@ -169,7 +176,9 @@ def run_sweep(
     """
     check_setting(setting)
     base = build_segmenter(config, method, setting, ground_remover)
-    d_start, d_stop, d_step = DEFAULT_RANGES.get(base.kind, (None, None, None))
+    d_start, d_stop, d_step = DEFAULT_RANGES.get(
+        base.kind, getattr(base.method, "sweep_range", (None, None, None))
+    )
     start = d_start if start is None else start
     stop = d_stop if stop is None else stop
     step = d_step if step is None else step
