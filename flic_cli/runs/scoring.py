@@ -22,6 +22,7 @@ from flic_cli.ground.base import Ground
 from flic_cli.io import read_label, read_scan
 from flic_cli.io.base import Frame, FrameRef
 from flic_cli.metrics import distance_band, score_frame
+from flic_cli.metrics.entropy import object_ids, segmentation_entropy
 from flic_cli.metrics.ground import ground_counts
 from flic_cli.metrics.panoptic import agnostic_panoptic_counts
 from flic_cli.projection import Projection
@@ -69,6 +70,8 @@ FRAME_COLUMNS: tuple[str, ...] = (
     "pq_fp",
     "pq_fn",
     "pq_iou_sum",
+    "ose",
+    "use",
 )
 
 #: Columns of the per-frame ground-extraction records (ground setting, one row per remover).
@@ -266,6 +269,7 @@ def add_scores(
     assert prep.labels is not None  # load_labelled_frame guarantees labels
     matches, stats = score_frame(prep.labels, labels, prep.points)
     pq = agnostic_panoptic_counts(prep.labels, labels)
+    ose, use = segmentation_entropy(object_ids(prep.labels), labels)
     n = len(matches)
     obj = out.objects
     obj["method"] += [method] * n
@@ -297,5 +301,7 @@ def add_scores(
         ("pq_fp", int(pq.fp[0])),
         ("pq_fn", int(pq.fn[0])),
         ("pq_iou_sum", float(pq.iou_sum[0])),
+        ("ose", round(ose, 6)),
+        ("use", round(use, 6)),
     ):
         out.frames[key].append(value)
