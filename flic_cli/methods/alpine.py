@@ -23,7 +23,8 @@ edges without the closing edge (last vertex to first); this module does the same
 split happens exactly when the reference's does.
 
 Class-agnostic variant (``agnostic = true``, preset ``alpine-agnostic``): every kept point is
-one class, linked below ``width_m``; no semantics needed, the fair comparison with FLIC.
+one class, linked below ``width_m`` (times ``width_scale``); no semantics needed, the fair
+comparison with FLIC.
 Clusters under ``min_size`` points are dropped afterwards, as for every method (the reference
 keeps every cluster, down to one point).
 """
@@ -70,7 +71,8 @@ class Alpine:
     k : nearest neighbours per point (8: the reference as published, see the module docstring).
     split : cut clusters larger than their class's box.
     margin : a cluster is cut when its box exceeds the class's box times this.
-    width_scale : every class's link distance (its box width) times this (1: the table).
+    width_scale : every link distance (a class's box width, or ``width_m``) times this (1: as
+        given; the parameter ``flic sweep-threshold`` varies).
     agnostic : one class for all points, linked below ``width_m`` (no semantics needed).
     width_m : the link distance of the class-agnostic variant, metres.
     min_size : smallest cluster kept, points.
@@ -134,7 +136,7 @@ class Alpine:
                 offset += 1
                 continue
             box = (max(length, width), min(length, width))
-            link = box[1] * (1.0 if self.agnostic else self.width_scale)
+            link = box[1] * self.width_scale
             pts = xy[idx]
             n, labels = knn_components(pts, link, self.k)
             if self.split and not self.agnostic:
