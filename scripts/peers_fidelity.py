@@ -112,7 +112,7 @@ def main(data: Path, out: Path) -> None:
                                  capture_output=True, text=True, check=True)  # fmt: skip
             ref_times.append(float(res.stdout.strip()))
         cvc_ref = np.fromfile(lab_file, dtype=np.int32)
-        cvc_flic, t_cvc = timed(Cvc().raw, pts)
+        cvc_flic, t_cvc = timed(Cvc(delta_range_m=0.5).raw, pts)  # the reference's step
         row["cvc_points"] = int(pts.shape[0])
         row["cvc_identical"] = same_partition(cvc_ref, cvc_flic)
         row["cvc_ari"] = adjusted_rand_score(cvc_ref, cvc_flic)

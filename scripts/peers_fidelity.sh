@@ -23,6 +23,9 @@ mkdir -p "$ref/build_cvc"
 g++ -O3 -std=c++17 -I"$ref/xmba15+curved_voxel_clustering/include" -I/usr/include/pcl-1.13 \
   -I/usr/include/eigen3 "$ref/xmba15+curved_voxel_clustering/src/CurvedVoxelClustering.cpp" \
   "$here/peers_ref/cvc_driver.cpp" -o "$ref/build_cvc/cvc_driver" -lpcl_common
+mkdir -p "$ref/build_euclidean"
+g++ -O3 -std=c++17 -I/usr/include/pcl-1.13 -I/usr/include/eigen3 "$here/peers_ref/euclidean_driver.cpp" \
+  -o "$ref/build_euclidean/euclidean_driver" -lpcl_common -lpcl_search -lpcl_kdtree -lpcl_segmentation
 # then, from the project root:
 #   python scripts/peers_fidelity.py ../shared/data/semantickitti results/peers/fidelity
 #   python scripts/peers_ref_diff.py ../shared/data/semantickitti > results/peers/fidelity/ref_diff.txt

@@ -47,7 +47,7 @@ def main(data: Path) -> None:
         subprocess.run([str(REF / "build_cvc" / "cvc_driver"), str(tmp / "in.xyz"),
                         str(tmp / "out.labels")], check=True, capture_output=True)  # fmt: skip
         ref = np.fromfile(tmp / "out.labels", dtype=np.int32)
-        mine = Cvc().raw(pts)
+        mine = Cvc(delta_range_m=0.5).raw(pts)  # the reference's defaults
         zero = ref == 0  # the reference's first cluster, where its unclustered points also go
         a = spans(ref[~zero], mine[~zero])
         print(f"{seq}/{fr:06d} CVC: reference cluster 0 holds {int(zero.sum())} points over "

@@ -26,13 +26,16 @@ class Hdbscan:
     Attributes
     ----------
     min_cluster_size : smallest group HDBSCAN calls a cluster, points.
-    min_samples : neighbours that define a point's core distance (None: ``min_cluster_size``).
+    min_samples : neighbours that define a point's core distance (0: ``min_cluster_size``, as
+        scikit-learn's None).
     cluster_selection_epsilon_m : clusters closer than this are not split, metres (0: off).
     min_size : smallest cluster kept afterwards, points (as for every method).
     """
 
     min_cluster_size: Annotated[int, Field(ge=2, description="HDBSCAN's smallest cluster")] = 20
-    min_samples: Annotated[int | None, Field(ge=1, description="core distance neighbours")] = None
+    min_samples: Annotated[
+        int, Field(ge=0, description="core distance neighbours (0: min_cluster_size)")
+    ] = 0
     cluster_selection_epsilon_m: Annotated[
         float, Field(ge=0, description="clusters closer than this are merged, metres")
     ] = 0.0
@@ -54,7 +57,7 @@ class Hdbscan:
 
         est = HDBSCAN(
             min_cluster_size=min(self.min_cluster_size, points.shape[0]),
-            min_samples=self.min_samples,
+            min_samples=self.min_samples or None,
             cluster_selection_epsilon=self.cluster_selection_epsilon_m,
             copy=True,
         )
