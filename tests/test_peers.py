@@ -271,3 +271,50 @@ def test_hdbscan_separates_blobs_and_leaves_noise() -> None:
     labels = Hdbscan(min_cluster_size=10, min_size=10).segment(sensor_image(pts), pts, None)
     assert len(set(labels[:60])) == 1 and len(set(labels[60:120])) == 1
     assert labels[0] != labels[60] and labels[0] > 0 and labels[60] > 0 and labels[120] == 0
+
+
+# ---- the runs ------------------------------------------------------------------------------
+
+
+def test_evaluate_runs_every_new_method_with_oracle_semantics(
+    sample_root,
+    tmp_path,  # noqa: ANN001
+) -> None:
+    """`flic evaluate --semantics oracle` runs the new methods (ALPINE with the ground truth's
+    classes) and writes OSE / USE and the oracle PQ with intervals."""
+    import pandas as pd
+    from typer.testing import CliRunner
+
+    from flic_cli.cli import app
+
+    out = tmp_path / "ev"
+    methods = "euclidean,slr,cvc,alpine,alpine-agnostic"
+    result = CliRunner().invoke(
+        app,
+        ["evaluate", str(sample_root), "--methods", methods, "--frames", "0:2",
+         "--semantics", "oracle", "--out", str(out)],
+    )  # fmt: skip
+    assert result.exit_code == 0, result.output
+    assert "OSE" in result.output and "PQ_oracle" in result.output
+    table = pd.read_csv(out / "table.csv")
+    assert table["method"].tolist() == methods.split(",")
+    for col in ("ose", "use", "pq_oracle", "pq_things_oracle"):
+        assert table[col].notna().all() and (table[col] >= 0).all()
+    frames = pd.read_csv(out / "per_frame.csv")
+    assert {"ose", "use"} <= set(frames.columns)
+    # the table's OSE is the mean of the per-frame values of the P setting
+    sel = frames[(frames["method"] == "slr") & (frames["setting"] == "no-ground")]
+    assert table.set_index("method").loc["slr", "ose"] == pytest.approx(sel["ose"].mean(), abs=1e-4)
+
+
+def test_segment_needs_semantics_for_alpine(sample_root, tmp_path) -> None:  # noqa: ANN001
+    from typer.testing import CliRunner
+
+    from flic_cli.cli import app
+
+    runner = CliRunner()
+    base = ["segment", str(sample_root), "--method", "alpine", "--frames", "0:1"]
+    bad = runner.invoke(app, [*base, "--out", str(tmp_path / "a")])
+    assert bad.exit_code == 2 and "--semantics" in bad.output
+    good = runner.invoke(app, [*base, "--semantics", "oracle", "--out", str(tmp_path / "b")])
+    assert good.exit_code == 0, good.output

@@ -11,7 +11,8 @@ Fast LiDAR Panoptic Segmentation without Training", ICCVW 2021).
 Memory is bounded: exactly coinciding points are merged first (they are always linked), and
 when the tree's pair count (:meth:`scipy.spatial.cKDTree.count_neighbors`, no pairs stored)
 exceeds :data:`PAIR_BUDGET`, the pairs are built in chunks of points whose neighbour counts sum
-to at most the budget, the components merged chunk by chunk. A dense blob of points thus costs
+to at most the budget (:meth:`scipy.spatial.cKDTree.sparse_distance_matrix` of the chunk against
+all points), the components merged chunk by chunk. A dense blob of points thus costs
 time, never more than ``PAIR_BUDGET + N`` stored pairs.
 """
 
@@ -88,10 +89,11 @@ def radius_components(
         # the longest run of points from ``start`` whose neighbour lists fit the budget
         stop = start + max(1, int(np.searchsorted(np.cumsum(counts[start:]), pair_budget)))
         stop = min(stop, m)
-        lists = tree.query_ball_point(uniq[start:stop], radius_m)
-        sizes = np.fromiter((len(x) for x in lists), dtype=np.int64, count=stop - start)
-        a = np.repeat(np.arange(start, stop), sizes)
-        b = np.fromiter((j for x in lists for j in x), dtype=np.int64, count=int(sizes.sum()))
+        pairs = cKDTree(uniq[start:stop]).sparse_distance_matrix(
+            tree, radius_m, output_type="ndarray"
+        )
+        a = pairs["i"].astype(np.int64) + start
+        b = pairs["j"].astype(np.int64)
         merged = components(m, comp[a], comp[b])
         comp = merged[comp]
         start = stop
