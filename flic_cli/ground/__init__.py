@@ -1,6 +1,6 @@
 """Ground extraction: the step between the range image and the clusterer.
 
-Every remover is a component (:mod:`flic_cli.config.component`) called as ``remover(image,
+Every remover is a component (:mod:`flic_cli.component`) called as ``remover(image,
 points) -> (H, W) bool`` (True = ground pixel), see :class:`flic_cli.ground.base.GroundRemover`:
 
 - ``paper`` -- :class:`PaperGround`, the FLIC paper's tan(beta) test with the height image;

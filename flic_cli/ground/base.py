@@ -15,7 +15,7 @@ from flic_cli.range_image import RangeImage
 
 
 class GroundRemover(Protocol):
-    """A ground remover: a component (see :mod:`flic_cli.config.component`) called on a range
+    """A ground remover: a component (see :mod:`flic_cli.component`) called on a range
     image and the scan's points; returns the (H, W) bool mask of its ground pixels (empty pixels
     are never ground).
 
