@@ -1,5 +1,6 @@
-"""Reading config files: the shipped presets (``flic_cli/configs/default.toml``), then the user's
-``--config`` file laid over them, validated once into a :class:`flic_cli.config.schema.Config`.
+"""Reading config files: the shipped presets (``flic_cli/config/presets/default.toml``), then the
+user's ``--config`` file laid over them, validated once into a
+:class:`flic_cli.config.schema.Config`.
 
 Every problem -- a file that is not TOML, an unknown section or key, a value of the wrong type or
 out of range -- is a :class:`flic_cli.errors.FlicInputError` naming the file, the table and key,
@@ -35,8 +36,9 @@ METHOD_KEYS = ("kind", "ground", "like")
 
 
 def defaults_path() -> Path:
-    """The shipped presets, ``flic_cli/configs/default.toml`` (``configs/`` in the repository)."""
-    return Path(str(resources.files("flic_cli.configs").joinpath("default.toml")))
+    """The shipped presets, ``flic_cli/config/presets/default.toml`` (``configs/`` in the
+    repository is a link to that folder)."""
+    return Path(str(resources.files("flic_cli.config").joinpath("presets", "default.toml")))
 
 
 def _read_toml(path: Path) -> dict[str, Any]:
