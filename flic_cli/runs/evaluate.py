@@ -29,6 +29,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from flic_cli import registry
 from flic_cli.config import Config
 from flic_cli.errors import FlicInputError
 from flic_cli.io import open_dataset
@@ -179,12 +180,13 @@ def select_labelled(
     """
     ds = open_dataset(data, sequences, frames, require_labels=not skip_missing)
     refs = ds.refs()
-    labelled = [r for r in refs if r.label_path is not None]
+    labelled = [r for r in refs if r.label_path is not None] if ds.labelled() else []
     if not labelled:
+        formats = [n for n, e in registry.FORMATS.items() if e.labelled]
         raise FlicInputError(
             data,
-            "no selected frame has ground-truth labels: evaluation needs labelled SemanticKITTI "
-            "data (sequences/NN/labels/*.label)",
+            "no selected frame has ground-truth labels: evaluation needs labelled data "
+            f"({', '.join(formats)}; SemanticKITTI: sequences/NN/labels/*.label)",
         )
     return ds, labelled, len(refs) - len(labelled)
 
