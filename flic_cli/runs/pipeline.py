@@ -125,7 +125,8 @@ def scan_semantics(frame: Frame, semantics: str) -> np.ndarray:
         predictions (see :mod:`flic_cli.semantics`).
     """
     from flic_cli.io import read_label
-    from flic_cli.semantics import oracle_semantics, read_semantics
+    from flic_cli.io.semantickitti import read_semantics
+    from flic_cli.semantics import oracle_semantics
 
     ref = frame.ref
     if semantics != "oracle":
