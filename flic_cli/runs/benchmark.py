@@ -74,7 +74,7 @@ from flic_cli.io.base import FrameRef
 from flic_cli.projection import Projection
 from flic_cli.runs.environment import collect_environment, environment_line, thread_limits
 from flic_cli.runs.frames import FrameLoop, sort_skipped, write_skipped
-from flic_cli.runs.output import check_output_dir
+from flic_cli.runs.output import check_output_dir, holding_out_lock
 from flic_cli.runs.pipeline import Segmenter, build_segmenters, prepare
 
 #: Speed-ups measured on fewer frames than this are printed as an indication only.
@@ -388,6 +388,7 @@ class BenchJob:
         ]
 
 
+@holding_out_lock
 def run_benchmark(
     data: Path,
     out: Path,

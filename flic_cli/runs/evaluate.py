@@ -35,8 +35,8 @@ from flic_cli.io import open_dataset
 from flic_cli.io.atomic import write_table
 from flic_cli.io.base import FrameRef
 from flic_cli.runs.frames import FrameLoop, Skipped, sort_skipped, write_skipped
-from flic_cli.runs.output import check_output_dir
-from flic_cli.runs.parallel import resolve_jobs
+from flic_cli.runs.output import check_output_dir, holding_out_lock
+from flic_cli.runs.parallel import SchedulerError, check_scheduler, resolve_jobs
 from flic_cli.runs.pipeline import build_segmenters
 from flic_cli.runs.scoring import (
     FRAME_COLUMNS,
@@ -213,6 +213,7 @@ def run_parameters(
     return json.loads(json.dumps(params, default=str))
 
 
+@holding_out_lock
 def run_evaluate(
     data: Path,
     out: Path,
@@ -265,13 +266,16 @@ def run_evaluate(
     ------
     FlicInputError
         On bad input: unknown setting or method, missing labels, a bad frame (without
-        ``skip_bad``), an ``out`` folder that cannot be used or holds another run.
+        ``skip_bad``) or every frame bad (with ``skip_bad``), an ``out`` folder that cannot be
+        used, holds another run or is in use by a run still going (``out`` is locked for the
+        run, :func:`flic_cli.io.atomic.locked_folder`).
     """
     # 1. what to evaluate, where to write
     if setting not in EVAL_SETTINGS:
         raise FlicInputError(None, f"--setting must be one of {', '.join(EVAL_SETTINGS)}")
     if semantics not in ("none", "oracle"):
         raise FlicInputError(None, f"--semantics must be none or oracle, got {semantics!r}")
+    check_scheduler(scheduler)
     bench = None if runtimes is None else read_runtimes(Path(runtimes))
     settings = EVAL_SETTINGS[setting]
     methods = list(dict.fromkeys(methods))
@@ -286,7 +290,8 @@ def run_evaluate(
     # 3. the resumable store
     params = run_parameters(data, config, methods, settings, ground_remover, sequences, frames)
     params["semantics"] = semantics
-    done = open_store(out, params, resume)
+    kinds = ("objects", "ground") + (("panoptic",) if semantics == "oracle" else ())
+    done = open_store(out, params, resume, kinds)
     todo = [r for r in refs if (r.sequence, r.frame) not in done]
     resumed = len(refs) - len(todo)
     if on_start is not None:
@@ -320,6 +325,8 @@ def run_evaluate(
             on_estimate(estimate_line(timing, len(rest), jobs, scheduler))
         for ref, scores in loops[1]:
             write_part(parts, ref.sequence, ref.frame, scores.tables())
+    except SchedulerError:
+        raise  # not a bad frame: the hint below does not apply
     except FlicInputError as exc:
         raise FlicInputError(
             exc.path,
@@ -327,6 +334,13 @@ def run_evaluate(
             "on past bad frames)",
         ) from None
     skipped = loops[0].skipped + loops[1].skipped
+    if skipped and len(skipped) == len(refs):
+        write_skipped(out / "skipped.csv", sort_skipped(skipped))
+        raise FlicInputError(
+            data,
+            f"every selected frame is bad ({len(skipped)}, listed in {out / 'skipped.csv'}): "
+            "nothing to evaluate",
+        )
     # 5. the tables, from the stored records of the selected frames
     bad = {(s.sequence, s.frame) for s in skipped}
     keys = [(r.sequence, r.frame) for r in refs if (r.sequence, r.frame) not in bad]

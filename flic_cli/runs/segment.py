@@ -30,7 +30,7 @@ from flic_cli.io.base import FrameRef
 from flic_cli.io.ply import write_ply
 from flic_cli.projection import Projection
 from flic_cli.runs.frames import FrameLoop, Skipped, sort_skipped, write_skipped
-from flic_cli.runs.output import check_output_dir
+from flic_cli.runs.output import check_output_dir, holding_out_lock
 from flic_cli.runs.pipeline import (
     Prepared,
     Segmenter,
@@ -128,6 +128,7 @@ class SegmentSummary:
         return f"{text} -> {self.out}"
 
 
+@holding_out_lock
 def run_segment(
     data: Path,
     out: Path,

@@ -22,7 +22,8 @@ from flic_cli.metrics import match_objects, summarize
 from flic_cli.projection import Projection
 from flic_cli.runs.evaluate import select_labelled
 from flic_cli.runs.frames import FrameLoop, Skipped, sort_skipped, write_skipped
-from flic_cli.runs.output import check_output_dir
+from flic_cli.runs.output import check_output_dir, holding_out_lock
+from flic_cli.runs.parallel import check_scheduler
 from flic_cli.runs.pipeline import Segmenter, build_segmenter, check_setting, prepare
 from flic_cli.runs.scoring import load_labelled_frame
 from flic_cli.runs.tables import percent
@@ -63,8 +64,12 @@ def sweep_values(start: float, stop: float, step: float) -> np.ndarray:
     Raises
     ------
     FlicInputError
-        When ``step <= 0``, ``stop < start``, a value is not positive, or there are too many.
+        When a bound is not finite (nan, inf), ``step <= 0``, ``stop < start``, a value is not
+        positive, or there are too many.
     """
+    for name, value in (("--from", start), ("--to", stop), ("--step", step)):
+        if not np.isfinite(value):
+            raise FlicInputError(None, f"{name} must be a finite number, got {value}")
     if not step > 0:
         raise FlicInputError(None, f"--step must be positive, got {step}")
     if stop < start:
@@ -132,6 +137,7 @@ class SweepResult:
         )
 
 
+@holding_out_lock
 def run_sweep(
     data: Path,
     out: Path,
@@ -168,6 +174,7 @@ def run_sweep(
     progress : show a progress bar.
     """
     check_setting(setting)
+    check_scheduler(scheduler)
     base = build_segmenter(config, method, setting, ground_remover)
     d_start, d_stop, d_step = DEFAULT_RANGES.get(base.kind, (None, None, None))
     start = d_start if start is None else start
@@ -188,6 +195,13 @@ def run_sweep(
     loop = FrameLoop(job, refs, jobs, scheduler, skip_bad, f"sweep {method}", progress)
     for ref, ious in loop:
         per_frame[(ref.sequence, ref.frame)] = ious
+    if loop.skipped and not per_frame:
+        write_skipped(out / "skipped.csv", sort_skipped(loop.skipped))
+        raise FlicInputError(
+            data,
+            f"every selected frame is bad ({len(loop.skipped)}, listed in "
+            f"{out / 'skipped.csv'}): nothing to sweep",
+        )
 
     ordered = [per_frame[k] for k in ((r.sequence, r.frame) for r in refs) if k in per_frame]
     ious = np.hstack(ordered) if ordered else np.zeros((values.size, 0))
