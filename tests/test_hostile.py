@@ -638,7 +638,7 @@ def _zero_device(path: Path) -> None:
 
 @pytest.mark.parametrize("special", [_fifo, _zero_device], ids=["fifo", "dev-zero"])
 def test_special_files_do_not_block(data: Data, special, alarm, capsys) -> None:
-    from flic_cli.io.moosmann import read_png_range, read_img_cfg
+    from flic_cli.io.moosmann import read_img_cfg, read_png_range
     from flic_cli.io.semantickitti import read_bin
 
     special(data.bin(1))
