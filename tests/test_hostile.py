@@ -464,7 +464,11 @@ def test_lock_is_released_when_its_holder_is_killed(tmp_path: Path) -> None:
         holder.wait()
     with locked_folder(out) as held:
         assert held == out
-    assert not out.exists()  # made for the lock, left empty: removed
+    assert out.is_dir()  # made by the killed holder, not by this run: kept
+    shutil.rmtree(out)
+    with locked_folder(out):
+        assert out.is_dir()
+    assert not out.exists()  # made for this lock and left empty: removed
 
 
 # ---------------------------------------------------------------------------------------------

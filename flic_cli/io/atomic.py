@@ -163,6 +163,11 @@ def staged_folder(out: str | Path) -> Iterator[Path]:
         if exc.errno in _FULL:
             raise FlicInputError(out, f"cannot be written: {os.strerror(exc.errno)}") from None
         raise
+    except FlicInputError as exc:  # name the output as the user knows it, not the staging name
+        if exc.path is None or not exc.path.resolve().is_relative_to(tmp.resolve()):
+            raise
+        inside = exc.path.resolve().relative_to(tmp.resolve())
+        raise FlicInputError(out / inside, exc.reason) from None
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
 
