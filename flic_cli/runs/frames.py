@@ -192,7 +192,7 @@ class FrameLoop(Generic[R]):
 #: Said before the first frame when numba's cache of flic's kernels is empty.
 COMPILE_NOTE = (
     "note: first run of this installation: numba compiles flic's kernels during the first "
-    "frame, about 100 s of one CPU core (once: they are cached for later runs)"
+    "frame, about one to two minutes (once: they are cached for later runs)"
 )
 
 
