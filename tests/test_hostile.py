@@ -466,9 +466,9 @@ def test_lock_is_released_when_its_holder_is_killed(tmp_path: Path) -> None:
         assert held == out
     assert out.is_dir()  # made by the killed holder, not by this run: kept
     shutil.rmtree(out)
-    with locked_folder(out):
-        assert out.is_dir()
-    assert not out.exists()  # made for this lock and left empty: removed
+    with locked_folder(out / "nested"):
+        assert (out / "nested").is_dir()
+    assert not out.exists()  # made for this lock and left empty: removed, parents included
 
 
 # ---------------------------------------------------------------------------------------------

@@ -83,13 +83,15 @@ def open_regular(path: str | Path) -> BinaryIO:
     Raises
     ------
     FlicInputError
-        When ``path`` is not a regular file (a folder, a FIFO, a device, a socket).
+        When ``path`` is a FIFO, a device or a socket.
     OSError
-        When it is missing or cannot be opened.
+        When it is missing, a folder (IsADirectoryError) or cannot be opened.
     """
     fd = os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_CLOEXEC", 0))
     try:
         mode = os.fstat(fd).st_mode
+        if stat.S_ISDIR(mode):  # the callers' "cannot be read (Is a directory)"
+            raise IsADirectoryError(errno.EISDIR, os.strerror(errno.EISDIR), str(path))
         if not stat.S_ISREG(mode):
             raise FlicInputError(path, f"is {_file_kind(mode)}, not a regular file")
         if hasattr(os, "O_NONBLOCK"):
@@ -103,7 +105,6 @@ def open_regular(path: str | Path) -> BinaryIO:
 def _file_kind(mode: int) -> str:
     """``a FIFO``, ``a character device``, ... of an ``st_mode``."""
     kinds = (
-        (stat.S_ISDIR, "a folder"),
         (stat.S_ISFIFO, "a FIFO (named pipe)"),
         (stat.S_ISCHR, "a character device"),
         (stat.S_ISBLK, "a block device"),
@@ -199,8 +200,8 @@ def locked_folder(out: str | Path) -> Iterator[Path]:
     """Hold an exclusive lock on the output folder ``out`` for the duration of a run.
 
     The lock is :func:`fcntl.flock` on the folder itself (no lock file is left behind); the
-    kernel releases it when the process ends in whatever way, a crash or SIGKILL included. A
-    folder made here for the lock is removed again when the run leaves it empty.
+    kernel releases it when the process ends in whatever way, a crash or SIGKILL included. The
+    folders made here for the lock are removed again when the run leaves them empty.
 
     Raises
     ------
@@ -210,7 +211,7 @@ def locked_folder(out: str | Path) -> Iterator[Path]:
     import fcntl
 
     out = Path(out)
-    made = not out.exists()
+    made = [p for p in (out, *out.parents) if not p.exists()]  # to remove again if left empty
     try:
         out.mkdir(parents=True, exist_ok=True)
         fd = os.open(out, os.O_RDONLY | getattr(os, "O_DIRECTORY", 0) | os.O_CLOEXEC)
@@ -228,11 +229,11 @@ def locked_folder(out: str | Path) -> Iterator[Path]:
         yield out
     finally:
         os.close(fd)
-        if made:
+        for folder in made:  # only when empty: the run failed before writing anything
             try:
-                out.rmdir()  # only when empty: the run failed before writing anything
+                folder.rmdir()
             except OSError:
-                pass
+                break
 
 
 def write_table(path: str | Path, table: pd.DataFrame) -> Path:

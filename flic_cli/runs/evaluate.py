@@ -109,7 +109,7 @@ def estimate_line(
     )
     if scheduler is not None:
         return line + "; divide by the number of dask worker threads"
-    workers = resolve_jobs(jobs)
+    workers = resolve_jobs(jobs, remaining)
     return line + (f" / {workers} processes = {_duration(total / workers)}" if workers > 1 else "")
 
 

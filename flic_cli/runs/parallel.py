@@ -96,7 +96,8 @@ def check_scheduler(address: str | None) -> None:
     Raises
     ------
     SchedulerError
-        When the address is not ``[tcp://]host:port`` (port 1-65535).
+        When the address is not ``[tcp://]host:port`` (port 1-65535), or dask.distributed is
+        not installed.
     """
     if address is None:
         return
@@ -107,6 +108,14 @@ def check_scheduler(address: str | None) -> None:
             f"--scheduler {address!r} is not a dask scheduler address such as "
             "tcp://10.0.0.5:8786 (protocol://host:port)",
         )
+    try:
+        import distributed  # noqa: F401
+    except ImportError:
+        raise SchedulerError(
+            None,
+            "--scheduler needs dask.distributed, which is not installed "
+            "(pip install 'flic[distributed]')",
+        ) from None
 
 
 def imap_frames(
