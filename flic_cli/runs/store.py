@@ -126,10 +126,14 @@ def read_parts(
             text.append(body)
         try:
             chunk = pd.read_csv(io.StringIO("".join(text)), dtype=dtypes, keep_default_na=False)
-        except (ValueError, pd.errors.ParserError):  # find the part that breaks the chunk
+        except (ValueError, pd.errors.ParserError) as exc:  # find the part that breaks it
             for sequence, frame in keys[start : start + _CHUNK_FRAMES]:
                 _check_part(part_path(parts, sequence, frame, kind), header, dtypes)
-            raise
+            raise FlicInputError(
+                parts,
+                f"part files of kind {kind} do not parse ({exc}): delete them and rerun with "
+                "--resume",
+            ) from None
         chunks.append(chunk)
     if not chunks:
         return pd.DataFrame({c: pd.Series(dtype=dtypes.get(c, "float64")) for c in columns})
