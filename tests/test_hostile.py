@@ -331,10 +331,16 @@ def test_malformed_scheduler_address_is_refused_at_once(data, command, address, 
 
 
 @pytest.mark.slow
-def test_unreachable_scheduler_gets_no_skip_bad_hint(data: Data) -> None:
+@pytest.mark.parametrize("command", ["evaluate", "sweep-threshold"])
+def test_unreachable_scheduler_gets_no_skip_bad_hint(data: Data, command) -> None:
     pytest.importorskip("distributed")
-    argv = ["sweep-threshold", data.kitti, "--method", "flic0", "--frames", "0:1"]
-    run = _cli([*argv, "--scheduler", "tcp://127.0.0.1:9", "--out", data.out])
+    seq = data.velodyne.parent
+    shutil.copy(data.bin(2), data.bin(3))  # a 4th frame: evaluate runs 3 here, then the cluster
+    shutil.copy(seq / "labels" / "000002.label", seq / "labels" / "000003.label")
+    method = ["--methods", "flic0"] if command == "evaluate" else ["--method", "flic0"]
+    run = _cli(
+        [command, data.kitti, *method, "--scheduler", "tcp://127.0.0.1:9", "--out", data.out]
+    )
     line = _one_error(run.returncode, run.stdout, run.stderr, "cannot reach the dask scheduler")
     assert "--skip-bad" not in line
 
