@@ -54,7 +54,8 @@ def check_output_dir(out: Path, inputs: list[Path] | tuple[Path, ...] = ()) -> P
 
 
 def holding_out_lock(func: F) -> F:
-    """Run ``func`` (a run with an ``out`` parameter) holding the lock of its output folder.
+    """Run ``func`` (a run with an ``out`` parameter, or a ``spec`` with an ``out`` field)
+    holding the lock of its output folder.
 
     Two runs into one ``--out`` would mix their results: the second is refused with a one-line
     error while the first holds the lock (:func:`flic_cli.io.atomic.locked_folder`, released
@@ -64,7 +65,8 @@ def holding_out_lock(func: F) -> F:
 
     @functools.wraps(func)
     def wrapper(*args: Any, **kwargs: Any) -> Any:
-        out = Path(signature.bind(*args, **kwargs).arguments["out"])
+        arguments = signature.bind(*args, **kwargs).arguments
+        out = Path(arguments["out"] if "out" in arguments else arguments["spec"].out)
         check_output_dir(out)
         with locked_folder(out):
             return func(*args, **kwargs)
