@@ -37,6 +37,7 @@ then ``lidar_to_sensor_transform`` gives the sensor frame (x forward, y left, z 
 from __future__ import annotations
 
 import json
+import os
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass, field
 from functools import cached_property
@@ -46,7 +47,8 @@ import numpy as np
 from numba import njit
 
 from flic_cli.errors import FlicInputError
-from flic_cli.io.sensor import SensorModel
+from flic_cli.io.base import Frame, FrameRef
+from flic_cli.io.sensor import FileInfo, SensorFileDataset, SensorModel
 from flic_cli.range_image import RangeImage
 
 FORMAT = "ouster"
@@ -261,7 +263,7 @@ class OusterMeta:
 
     @cached_property
     def xyz_lut(self) -> tuple[np.ndarray, np.ndarray]:
-        """``(direction, offset)``, each (H, W, 3) float64 in the DESTAGGERED layout: the sensor
+        """``(direction, offset)``, each (H, W, 3) float32 in the DESTAGGERED layout: the sensor
         frame point of a pixel is ``direction * range_mm + offset`` (metres), as ouster-sdk's
         ``make_xyz_lut`` computes it for the staggered scan."""
         h, w = self.beams, self.columns
@@ -285,7 +287,10 @@ class OusterMeta:
         o = o @ rot.T + trans
         d *= 0.001
         o *= 0.001
-        return destagger(d, self.pixel_shift), destagger(o, self.pixel_shift)
+        return (
+            np.ascontiguousarray(destagger(d, self.pixel_shift), dtype=np.float32),
+            np.ascontiguousarray(destagger(o, self.pixel_shift), dtype=np.float32),
+        )
 
 
 def read_meta(path: str | Path) -> OusterMeta:
@@ -445,31 +450,126 @@ def decode_frames(
 def _assemble(
     batch: list[bytes], frame_id: int, meta: OusterMeta, fields: tuple[str, ...]
 ) -> OusterFrame:
-    arr = np.frombuffer(b"".join(batch), dtype=np.uint8).reshape(len(batch), meta.packet_size)
-    dec = _decode(arr, meta, fields)
-    mid = dec["measurement_id"].reshape(-1)
-    valid = dec["valid"].reshape(-1)
-    if mid.size and int(mid.max()) >= meta.columns:
+    buf = np.frombuffer(b"".join(batch), dtype=np.uint8)
+    head, col_head, chan, _ = PROFILES[meta.profile]
+    legacy = meta.profile == "LEGACY"
+    h, w = meta.beams, meta.columns
+    out = np.zeros((h, w), dtype=np.uint32)
+    columns = np.zeros(w, dtype=np.bool_)
+    if chan == 12:  # 4-byte aligned ranges: read them as uint32
+        bad = _decode_ranges32(
+            buf.view("<u4"), len(batch), meta.packet_size // 4, head // 4, col_head // 4,
+            meta.columns_per_packet, legacy, out, columns,
+        )  # fmt: skip
+    else:
+        bad = _decode_ranges(
+            buf, len(batch), meta.packet_size, head, col_head, chan, meta.columns_per_packet,
+            legacy, out, columns,
+        )  # fmt: skip
+    if bad >= 0:
         raise OusterDataError(
-            f"a packet holds measurement id {int(mid.max())}, beyond the {meta.columns} columns "
+            f"a packet holds measurement id {bad}, beyond the {meta.columns} columns "
             f"of the metadata's lidar mode {meta.lidar_mode}: the metadata does not match the "
             "recording"
         )
-    h, w = meta.beams, meta.columns
-    rng = dec["range"].reshape(-1, h)
-    out = np.zeros((h, w), dtype=np.uint32)
-    good = mid[valid]
-    out[:, good] = rng[valid].T
-    columns = np.zeros(w, dtype=bool)
-    columns[good] = True
     extra = {}
-    for name in fields:
-        if name in dec:
-            f = dec[name].reshape(-1, h)
-            img = np.zeros((h, w), dtype=f.dtype)
-            img[:, good] = f[valid].T
-            extra[name] = img
+    if fields:
+        dec = _decode(buf.reshape(len(batch), meta.packet_size), meta, fields)
+        mid = dec["measurement_id"].reshape(-1)
+        valid = dec["valid"].reshape(-1)
+        good = mid[valid]
+        for name in fields:
+            if name in dec:
+                f = dec[name].reshape(-1, h)
+                img = np.zeros((h, w), dtype=f.dtype)
+                img[:, good] = f[valid].T
+                extra[name] = img
     return OusterFrame(frame_id, out, columns, extra)
+
+
+@njit(cache=True)
+def _decode_ranges32(
+    words: np.ndarray,
+    n_packets: int,
+    size: int,
+    head: int,
+    col_head: int,
+    cols: int,
+    legacy: bool,
+    out: np.ndarray,
+    columns: np.ndarray,
+) -> int:
+    """:func:`_decode_ranges` for 12-byte channels, over the packets as uint32 words (all
+    offsets in words)."""
+    h, w = out.shape
+    col_size = col_head + 3 * h + (1 if legacy else 0)
+    mask = np.uint32(0xFFFFF) if legacy else np.uint32(0x7FFFF)
+    for p in range(n_packets):
+        for c in range(cols):
+            base = p * size + head + c * col_size
+            mid = np.int64(words[base + 2] & 0xFFFF)
+            if legacy:
+                ok = words[base + col_size - 1] == np.uint32(0xFFFFFFFF)
+            else:
+                ok = ((words[base + 2] >> 16) & 1) == 1
+            if not ok:
+                continue
+            if mid >= w:
+                return mid
+            columns[mid] = True
+            o = base + col_head
+            for i in range(h):
+                out[i, mid] = words[o + 3 * i] & mask
+    return -1
+
+
+@njit(cache=True)
+def _decode_ranges(
+    buf: np.ndarray,
+    n_packets: int,
+    size: int,
+    head: int,
+    col_head: int,
+    chan: int,
+    cols: int,
+    legacy: bool,
+    out: np.ndarray,
+    columns: np.ndarray,
+) -> int:
+    """Fill the staggered (H, W) range image ``out`` (mm) and the received-column mask from
+    ``n_packets`` packets in ``buf``; returns -1, or a measurement id beyond W (then stops)."""
+    h, w = out.shape
+    status = 4 if legacy else 0
+    col_size = col_head + h * chan + status
+    for p in range(n_packets):
+        for c in range(cols):
+            base = p * size + head + c * col_size
+            mid = np.int64(buf[base + 8]) | (np.int64(buf[base + 9]) << 8)
+            if legacy:
+                e = base + col_size - 4
+                ok = (buf[e] & buf[e + 1] & buf[e + 2] & buf[e + 3]) == 0xFF
+            else:
+                ok = (buf[base + 10] & 1) == 1
+            if not ok:
+                continue
+            if mid >= w:
+                return mid
+            columns[mid] = True
+            o = base + col_head
+            for i in range(h):
+                if chan == 12:
+                    r = (
+                        np.uint32(buf[o])
+                        | (np.uint32(buf[o + 1]) << 8)
+                        | (np.uint32(buf[o + 2]) << 16)
+                        | (np.uint32(buf[o + 3]) << 24)
+                    )
+                    r &= np.uint32(0xFFFFF) if legacy else np.uint32(0x7FFFF)
+                else:
+                    r = ((np.uint32(buf[o]) | (np.uint32(buf[o + 1]) << 8)) & 0x7FFF) * 8
+                out[i, mid] = r
+                o += chan
+    return -1
 
 
 def frame_image(frame: OusterFrame, meta: OusterMeta) -> tuple[RangeImage, np.ndarray]:
@@ -517,6 +617,191 @@ def _image_points(
                 counts[i, c] = 1
                 pix[j] = i * w + c
                 for k in range(3):
-                    pts[j, k] = np.float32(direction[i, c, k] * rf + offset[i, c, k])
+                    pts[j, k] = np.float32(
+                        np.float64(direction[i, c, k]) * rf + np.float64(offset[i, c, k])
+                    )
                 j += 1
     return ranges, pix, counts, pts
+
+
+# ---------------------------------------------------------------------------------------------
+# pcap recordings
+# ---------------------------------------------------------------------------------------------
+
+
+def _is_ouster_json(path: Path) -> bool:
+    try:
+        with open(path, "rb") as f:
+            return b"beam_altitude_angles" in f.read(1 << 20)
+    except OSError:
+        return False
+
+
+def find_meta(pcap: Path) -> Path | None:
+    """The metadata JSON of an Ouster pcap: ``<name>.json`` beside it, else the one Ouster JSON
+    of its folder whose name shares the longest prefix with the pcap's (at least up to the
+    first ``_``, e.g. ``OS-1-64_...``); None when there is none.
+
+    Raises
+    ------
+    FlicInputError
+        When two JSON files fit equally well.
+    """
+    same = pcap.with_suffix(".json")
+    if same.is_file() and _is_ouster_json(same):
+        return same
+    stem = pcap.stem
+    best: list[tuple[int, Path]] = []
+    for cand in sorted(pcap.parent.glob("*.json")):
+        n = len(os.path.commonprefix([stem, cand.stem]))
+        if "_" in stem and n < stem.index("_") + 1:
+            continue
+        if n and _is_ouster_json(cand):
+            best.append((n, cand))
+    if not best:
+        return None
+    best.sort(key=lambda t: -t[0])
+    if len(best) > 1 and best[0][0] == best[1][0]:
+        raise FlicInputError(
+            pcap,
+            f"has no {same.name}, and {best[0][1].name} and {best[1][1].name} fit its name "
+            f"equally well: name its metadata {same.name}",
+        )
+    return best[0][1]
+
+
+@dataclass
+class _PcapState:
+    index: object  # UdpIndex
+    meta: OusterMeta
+    packets: list[np.ndarray]  # per complete frame: indices into index
+
+
+class OusterPcapDataset(SensorFileDataset):
+    """An Ouster pcap with its metadata JSON, or a folder of them (implements
+    :class:`flic_cli.io.base.Dataset`).
+
+    A frame is one complete revolution (first and last column received); revolutions cut off
+    at the start or end of the capture are left out (``flic info`` lists them). The frame's
+    points are its valid pixels (range > 0) in row-major order of the destaggered image.
+    """
+
+    format = FORMAT
+    suffixes = (".pcap", ".pcapng")
+
+    @classmethod
+    def accepts(cls, path: Path) -> bool:
+        """A pcap file with an Ouster metadata JSON beside it (:func:`find_meta`)."""
+        from flic_cli.io.pcap import is_capture
+
+        if not (path.is_file() and path.name.lower().endswith(cls.suffixes)):
+            return False
+        try:
+            return is_capture(path) and find_meta(path) is not None
+        except FlicInputError:
+            return True  # ambiguous metadata: ours, and opening says why
+
+    def _open(self, path: Path) -> FileInfo:
+        from flic_cli.io.pcap import index_udp, read_payloads
+
+        meta_path = find_meta(path)
+        if meta_path is None:
+            raise FlicInputError(path, "has no Ouster metadata JSON beside it")
+        meta = read_meta(meta_path)
+        index = index_udp(path)
+        if index.size.size == 0:
+            raise FlicInputError(
+                path, f"holds no UDP packets ({index.n_records} records): no lidar data"
+            )
+        on_port = (
+            index.port == meta.udp_port_lidar
+            if meta.udp_port_lidar is not None
+            else np.ones(index.size.size, dtype=bool)
+        )
+        lidar = np.flatnonzero(on_port & (index.size == meta.packet_size))
+        if lidar.size == 0:
+            sizes = ", ".join(
+                f"{n} x {s} bytes on port {p}"
+                for (p, s), n in _counts(index.port, index.size).items()
+            )
+            big = on_port & (index.size > 1000)
+            if big.any():  # lidar-sized packets of another layout
+                try:
+                    check_packet(bytes(int(index.size[np.flatnonzero(big)[0]])), meta)
+                except OusterDataError as exc:
+                    raise FlicInputError(path, f"{exc} (metadata {meta_path.name})") from None
+            raise FlicInputError(
+                path,
+                f"holds no Ouster lidar packets of {meta.packet_size} bytes (profile "
+                f"{meta.profile}, {meta.beams} beams, metadata {meta_path.name}); it has {sizes}",
+            )
+        payloads = read_payloads(index, lidar)
+        try:
+            frames = list(decode_frames(payloads, meta))
+        except OusterDataError as exc:
+            raise FlicInputError(path, f"{exc} (metadata {meta_path.name})") from None
+        packets, points, partial = [], [], []
+        start = 0
+        max_mid = -1
+        for f in frames:
+            stop = start + _packets_of(payloads, start, f.frame_id, meta)
+            if f.columns.any():
+                max_mid = max(max_mid, int(np.flatnonzero(f.columns).max()))
+            if f.complete:
+                packets.append(lidar[start:stop])
+                points.append(f.valid)
+            else:
+                partial.append(
+                    f"frame id {f.frame_id}: {int(f.columns.sum())} of {meta.columns} columns, "
+                    f"{f.valid:,} points"
+                )
+            start = stop
+        if not packets and max_mid + 1 < meta.columns:
+            raise FlicInputError(
+                path,
+                f"has no complete revolution: its packets fill columns up to {max_mid} of the "
+                f"{meta.columns} that {meta_path.name} declares (lidar mode {meta.lidar_mode}): "
+                "the metadata does not match the recording",
+            )
+        model = meta.sensor_model()
+        notes = model.notes + (f"metadata {meta_path.name}",)
+        model = SensorModel(
+            model.name, model.elevation, model.azimuth_offset, model.columns,
+            model.angles_from, model.beam_origin_mm, model.columns_from, notes,
+        )  # fmt: skip
+        return FileInfo(
+            path,
+            len(packets),
+            model,
+            np.array(points, dtype=np.int64),
+            partial,
+            _PcapState(index, meta, packets),
+        )
+
+    def _load(self, info: FileInfo, k: int) -> Frame:
+        from flic_cli.io.pcap import read_payloads
+
+        state: _PcapState = info.state  # type: ignore[assignment]
+        payloads = read_payloads(state.index, state.packets[k])
+        try:
+            (frame,) = decode_frames(payloads, state.meta)
+        except (OusterDataError, ValueError) as exc:
+            raise FlicInputError(info.path, f"frame {k} cannot be decoded ({exc})") from None
+        image, points = frame_image(frame, state.meta)
+        ref = FrameRef(self.sequence_name(info.path), k, info.path, None, FORMAT)
+        return Frame(ref, points, None, image)
+
+
+def _packets_of(payloads: list[bytes], start: int, frame_id: int, meta: OusterMeta) -> int:
+    """Number of consecutive packets from ``start`` with frame id ``frame_id``."""
+    n = 0
+    while start + n < len(payloads) and _frame_id(payloads[start + n], meta) == frame_id:
+        n += 1
+    return n
+
+
+def _counts(port: np.ndarray, size: np.ndarray) -> dict[tuple[int, int], int]:
+    out: dict[tuple[int, int], int] = {}
+    for p, s in zip(port.tolist(), size.tolist(), strict=True):
+        out[(p, s)] = out.get((p, s), 0) + 1
+    return out
