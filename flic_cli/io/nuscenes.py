@@ -231,3 +231,10 @@ class NuScenesDataset(SensorFileDataset):
                 labels = labels[state.keep]
         ref = FrameRef(self.sequence_name(info.path), k, info.path, label_path, FORMAT)
         return Frame(ref, xyz, labels, image, finite=state.keep)
+
+
+def load_labelled(ref: FrameRef) -> Frame:
+    """A labelled sweep from its reference alone (evaluation workers)."""
+    ds = NuScenesDataset(ref.path, require_labels=True)
+    (own,) = ds.refs()
+    return ds.load(own)
