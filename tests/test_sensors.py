@@ -517,3 +517,52 @@ def test_pcd_bin_size_not_a_multiple_of_20(
     bad = tmp_path / "cut__LIDAR_TOP__1.pcd.bin"
     bad.write_bytes((shared_data / SENSORS / NUSCENES).read_bytes()[:-7])
     _bad(["segment", bad], capsys, tmp_path / "o", str(bad), "multiple of 20")
+
+
+# ---------------------------------------------------------------------------------------------
+# ouster-sdk: the same ranges, pixel by pixel (where it is installed)
+# ---------------------------------------------------------------------------------------------
+
+
+def _sdk_python() -> str:
+    """An interpreter with ouster-sdk: this one, or ``FLIC_OUSTER_SDK_PYTHON`` (a separate venv,
+    since ouster-sdk's pins clash with flic's environment); skip without one."""
+    import importlib.util
+    import os
+    import sys
+
+    try:
+        if importlib.util.find_spec("ouster.sdk") is not None:
+            return sys.executable
+    except ModuleNotFoundError:
+        pass
+    env = os.environ.get("FLIC_OUSTER_SDK_PYTHON")
+    if env and Path(env).exists():
+        return env
+    pytest.skip("ouster-sdk is not installed (set FLIC_OUSTER_SDK_PYTHON to a venv's python)")
+
+
+@pytest.mark.parametrize(
+    ("pcap", "meta"),
+    [(OS2 + ".pcap", OS2 + ".json"), (OS1_PCAP, "ouster/OS-1-64_sensor_config_reduced.json")],
+)
+def test_ranges_equal_ouster_sdk(shared_data: Path, tmp_path: Path, pcap: str, meta: str) -> None:
+    import subprocess
+
+    from flic_cli.io.pcap import read_payloads
+
+    python = _sdk_python()
+    script = Path(__file__).resolve().parents[1] / "scripts/sensors/ouster_sdk_dump.py"
+    npz = tmp_path / "sdk.npz"
+    src = shared_data / SENSORS
+    subprocess.run([python, script, src / pcap, src / meta, npz], check=True, capture_output=True)
+    sdk = np.load(npz)
+    ds = open_dataset(src / pcap)
+    (ref,) = ds.refs()
+    state = ds.infos[ref.sequence].state
+    (raw,) = decode_frames(read_payloads(state.index, state.packets[0]), state.meta)
+    np.testing.assert_array_equal(destagger(raw.range_mm, state.meta.pixel_shift), sdk["range_0"])
+    frame = ds.load(ref)
+    np.testing.assert_array_equal(frame.image.ranges, (sdk["range_0"] * 0.001).astype(np.float32))
+    xyz = sdk["xyz_0"].reshape(-1, 3)[frame.image.point_pixel]
+    np.testing.assert_allclose(frame.points, xyz, atol=1e-4)
