@@ -82,11 +82,14 @@ def main() -> None:
                 "format": ds.format,
                 "image": "x".join(map(str, frame.image.shape)),
                 "points": frame.points.shape[0],
+                "load_ms_min": round(1e3 * float(np.min(ours)), 3),
                 "load_ms_median": round(1e3 * float(np.median(ours)), 3),
                 "load_ms_p10": round(1e3 * float(np.percentile(ours, 10)), 3),
                 "load_ms_p90": round(1e3 * float(np.percentile(ours, 90)), 3),
                 "peer": peer_name,
+                "peer_ms_min": round(1e3 * float(np.min(theirs)), 3),
                 "peer_ms_median": round(1e3 * float(np.median(theirs)), 3),
+                "load_average_1min": round(os.getloadavg()[0], 1),
                 "repeats": args.repeat,
             }
         )
