@@ -566,3 +566,47 @@ def test_ranges_equal_ouster_sdk(shared_data: Path, tmp_path: Path, pcap: str, m
     np.testing.assert_array_equal(frame.image.ranges, (sdk["range_0"] * 0.001).astype(np.float32))
     xyz = sdk["xyz_0"].reshape(-1, 3)[frame.image.point_pixel]
     np.testing.assert_allclose(frame.points, xyz, atol=1e-4)
+
+
+# ---------------------------------------------------------------------------------------------
+# Containers: pcapng, folders of recordings, metadata next to the pcap
+# ---------------------------------------------------------------------------------------------
+
+
+def test_pcapng_gives_the_same_frame(shared_data: Path, tmp_path: Path) -> None:
+    import dpkt
+
+    src = shared_data / SENSORS / VLP16
+    ng = tmp_path / "in" / "vlp16.pcapng"
+    ng.parent.mkdir()
+    with open(src, "rb") as f, open(ng, "wb") as g:
+        w = dpkt.pcapng.Writer(g)
+        for ts, buf in dpkt.pcap.Reader(f):
+            w.writepkt(buf, ts=ts)
+    a = open_dataset(src)
+    b = open_dataset(ng)
+    assert b.format == "velodyne" and b.infos["vlp16"].state.index.offset is None
+    np.testing.assert_array_equal(a.load(a.refs()[0]).points, b.load(b.refs()[0]).points)
+
+
+def test_a_folder_of_ouster_pcaps_pairs_each_with_its_json(shared_data: Path) -> None:
+    ds = open_dataset(shared_data / SENSORS / "ouster")
+    assert ds.format == "ouster"
+    names = {r.sequence: ds.infos[r.sequence].sensor for r in ds.refs()}
+    assert set(names) == {"OS-2-128-U1_v2.3.0_1024x10", "OS-1-64_1024x10_fw20"}
+    assert names["OS-1-64_1024x10_fw20"].beams == 64  # OS-1-64_sensor_config_reduced.json
+    assert names["OS-2-128-U1_v2.3.0_1024x10"].beams == 128
+
+
+def test_metadata_ambiguous_names_are_an_error(
+    shared_data: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    d = tmp_path / "in"
+    d.mkdir()
+    shutil.copy(shared_data / SENSORS / OS1_PCAP, d / "rec_a.pcap")
+    for name in ("rec_1.json", "rec_2.json"):
+        shutil.copy(shared_data / SENSORS / "ouster/OS-1-64_sensor_config_reduced.json", d / name)
+    line = _bad(["segment", d / "rec_a.pcap"], capsys, tmp_path / "o", "rec_a.pcap")
+    assert "equally well" in line
+    shutil.copy(d / "rec_1.json", d / "rec_a.json")  # the same name wins
+    assert open_dataset(d / "rec_a.pcap").format == "ouster"
