@@ -322,15 +322,15 @@ def _ring_cloud(beams: int = 16, width: int = 900) -> tuple[np.ndarray, np.ndarr
 
 
 @pytest.mark.parametrize("encoding", ["ascii", "binary", "binary_compressed"])
-@pytest.mark.parametrize("unit", ["radians", "centidegrees"])
+@pytest.mark.parametrize("unit", ["radians", "degrees", "centidegrees"])
 def test_pcd_encodings_and_units(tmp_path: Path, encoding: str, unit: str) -> None:
     from pypcd4 import Encoding, PointCloud
 
     xyz, ring, az = _ring_cloud()
     # the field as nebula writes it: clockwise from x, in [0, 2 pi) or 0.01 degree
     field = np.mod(-az, 2 * np.pi)
-    if unit == "centidegrees":
-        field = np.degrees(field) * 100
+    if unit != "radians":
+        field = np.degrees(field) * (100 if unit == "centidegrees" else 1)
     pc = PointCloud.from_points(
         [xyz[:, 0], xyz[:, 1], xyz[:, 2], ring.astype(np.uint16), field.astype(np.float32)],
         ("x", "y", "z", "ring", "azimuth"),
@@ -388,7 +388,9 @@ def test_nuscenes_evaluate_scores_a_label_file(
     )
     assert code == 0, err
     (label,) = seg.rglob("*.label")
-    pred = np.fromfile(label, dtype="<u4") >> 16
+    from flic_cli.io.semantickitti import instance
+
+    pred = instance(np.fromfile(label, dtype="<u4"))
     ids, counts = np.unique(pred[pred > 0], return_counts=True)
     big = ids[counts >= 100][:5]
     assert big.size >= 2
@@ -610,3 +612,35 @@ def test_metadata_ambiguous_names_are_an_error(
     assert "equally well" in line
     shutil.copy(d / "rec_1.json", d / "rec_a.json")  # the same name wins
     assert open_dataset(d / "rec_a.pcap").format == "ouster"
+
+
+def test_nuscenes_root_finds_labels_through_sample_data(shared_data: Path, tmp_path: Path) -> None:
+    from flic_cli.classes import thing_mask
+
+    root = tmp_path / "nuscenes"
+    lidar = root / "samples" / "LIDAR_TOP"
+    lidar.mkdir(parents=True)
+    src = shared_data / SENSORS / NUSCENES
+    shutil.copy(src, lidar / src.name)
+    (root / "v1.0-mini").mkdir()
+    rows = [{"token": "abc123", "filename": f"samples/LIDAR_TOP/{src.name}"}]
+    (root / "v1.0-mini" / "sample_data.json").write_text(json.dumps(rows))
+    (root / "panoptic" / "v1.0-mini").mkdir(parents=True)
+    n = src.stat().st_size // 20
+    data = np.full(n, 24 * 1000, dtype=np.uint16)  # driveable surface
+    data[:100] = 17 * 1000 + 3  # car 3
+    data[100:150] = 9 * 1000 + 1  # a barrier: no SemanticKITTI thing (fence)
+    np.savez(root / "panoptic" / "v1.0-mini" / "abc123_panoptic.npz", data=data)
+    ds = open_dataset(root, require_labels=True)
+    assert ds.format == "nuscenes"
+    frame = ds.load(ds.refs()[0])
+    assert frame.labels is not None and frame.labels.shape[0] == frame.points.shape[0]
+    from flic_cli.io.nuscenes import read_panoptic
+    from flic_cli.io.semantickitti import instance, semantic
+
+    full = read_panoptic(frame.ref.label_path, n)
+    sem, inst = semantic(full), instance(full)
+    assert (sem[:100] == 10).all() and (inst[:100] == 3).all()  # car
+    assert (sem[100:150] == 51).all() and (inst[100:150] == 0).all()  # fence, no instance
+    assert (sem[150:] == 40).all()  # road
+    assert thing_mask(full).sum() == 100

@@ -25,6 +25,7 @@ from pathlib import Path
 
 import numpy as np
 
+from flic_cli.classes import THING_LUT
 from flic_cli.errors import FlicInputError
 from flic_cli.io.base import Frame, FrameRef
 from flic_cli.io.pcd import cloud_geometry, kept_points
@@ -91,7 +92,7 @@ def read_panoptic(path: str | Path, n_points: int) -> np.ndarray:
     """(N,) uint32 SemanticKITTI-encoded labels of a Panoptic nuScenes ``.npz``.
 
     The semantic class is :data:`CATEGORY_TO_KITTI` of ``data // 1000``, the instance id
-    ``data % 1000`` (0 = none; stuff classes carry none).
+    ``data % 1000`` for SemanticKITTI thing classes, 0 for the others.
 
     Raises
     ------
@@ -115,7 +116,7 @@ def read_panoptic(path: str | Path, n_points: int) -> np.ndarray:
     if cat.size and (cat.min() < 0 or cat.max() >= lut.size):
         raise FlicInputError(path, f"has category {int(cat.max())}, beyond nuScenes' 32")
     sem = lut[cat]
-    inst = np.where(sem > 0, data % 1000, 0)
+    inst = np.where(THING_LUT[sem], data % 1000, 0)  # barrier / traffic cone: stuff here
     return encode_labels(sem.astype(np.uint32), inst.astype(np.uint32))
 
 
