@@ -644,3 +644,57 @@ def test_nuscenes_root_finds_labels_through_sample_data(shared_data: Path, tmp_p
     assert (sem[100:150] == 51).all() and (inst[100:150] == 0).all()  # fence, no instance
     assert (sem[150:] == 40).all()  # road
     assert thing_mask(full).sum() == 100
+
+
+def _write_pcap(path: Path, payloads: list[bytes], port: int) -> None:
+    import dpkt
+
+    with open(path, "wb") as f:
+        w = dpkt.pcap.Writer(f)
+        for k, data in enumerate(payloads):
+            udp = dpkt.udp.UDP(sport=7502, dport=port, data=data)
+            udp.ulen = len(udp)
+            ip = dpkt.ip.IP(src=b"\x0a\0\0\1", dst=b"\x0a\0\0\2", p=17, data=udp)
+            ip.len = len(ip)
+            w.writepkt(bytes(dpkt.ethernet.Ethernet(data=ip)), ts=k * 1e-3)
+
+
+def test_frames_count_complete_revolutions_inside_a_pcap(tmp_path: Path) -> None:
+    """A capture that starts and ends mid-revolution: the partial revolutions are left out,
+    ``--frames`` counts the complete ones from 0 inside the file."""
+    meta = _meta("RNG19_RFL8_SIG16_NIR16")
+    rng = np.random.default_rng(5)
+    images = [
+        rng.integers(1, 60_000, (meta.beams, meta.columns)).astype(np.uint32) for _ in range(4)
+    ]
+    packets = []
+    for k, img in enumerate(images):
+        pk = _packets(meta, img, 5 + k)
+        packets += pk[2:] if k == 0 else pk[:1] if k == 3 else pk  # cut first and last turns
+    d = tmp_path / "in"
+    d.mkdir()
+    _write_pcap(d / "rec.pcap", packets, 7502)
+    js = {
+        "beam_altitude_angles": meta.altitude_deg.tolist(),
+        "beam_azimuth_angles": meta.azimuth_deg.tolist(),
+        "lidar_mode": f"{meta.columns}x10",
+        "udp_port_lidar": 7502,
+        "data_format": {
+            "pixels_per_column": meta.beams,
+            "columns_per_packet": 16,
+            "columns_per_frame": meta.columns,
+            "pixel_shift_by_row": meta.pixel_shift.tolist(),
+            "column_window": [0, meta.columns - 1],
+            "udp_profile_lidar": meta.profile,
+        },
+    }
+    (d / "rec.json").write_text(json.dumps(js))
+    ds = open_dataset(d / "rec.pcap")
+    assert [r.frame for r in ds.refs()] == [0, 1]
+    assert len(ds.infos["rec"].partial) == 2
+    for k, ref in enumerate(ds.refs()):
+        frame = ds.load(ref)
+        expect = (destagger(images[k + 1], meta.pixel_shift) * 0.001).astype(np.float32)
+        np.testing.assert_array_equal(frame.image.ranges, expect)
+    (only,) = open_dataset(d / "rec.pcap", frames=(1, 2)).refs()
+    assert only.frame == 1
