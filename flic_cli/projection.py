@@ -530,4 +530,5 @@ def _project_spherical(
         "spherical",
         counts.reshape(rows, width),
         heights.reshape(rows, width),
+        every_point_has_pixel=False,
     )

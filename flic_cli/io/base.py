@@ -102,6 +102,20 @@ class Dataset(Protocol):
         ...
 
 
+def in_frames(frame: int, frames: tuple[int | None, int | None] | None) -> bool:
+    """True when ``frame`` lies in ``frames = (start, stop)`` (stop exclusive, None = open)."""
+    if frames is None:
+        return True
+    start, stop = frames
+    return (start is None or frame >= start) and (stop is None or frame < stop)
+
+
+def frames_text(frames: tuple[int | None, int | None]) -> str:
+    """``(10, None)`` -> ``"10:"``: a frame range as the command line writes it."""
+    start, stop = frames
+    return f"{'' if start is None else start}:{'' if stop is None else stop}"
+
+
 def select_sequences(root: Path, found: dict[str, T], sequences: list[str] | None) -> dict[str, T]:
     """The requested entries of ``found`` (sequence name -> anything), sorted; all when None.
 

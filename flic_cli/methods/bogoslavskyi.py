@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from typing import Annotated, ClassVar
+from typing import TYPE_CHECKING, Annotated, ClassVar
 
 import numpy as np
 from pydantic import Field
@@ -10,9 +10,12 @@ from pydantic.dataclasses import dataclass
 
 from flic_cli.config.component import STRICT
 from flic_cli.methods._unionfind import ANGLE, run_kernel
-from flic_cli.methods.base import point_weights
+from flic_cli.methods.base import ground_parts, point_weights
 from flic_cli.methods.flic import cached_sets
 from flic_cli.range_image import RangeImage
+
+if TYPE_CHECKING:
+    from flic_cli.ground.base import Ground
 
 #: the key of the direct connections alone (see :func:`flic_cli.methods.flic.cached_sets`)
 DIRECT = ((), "map")
@@ -39,9 +42,8 @@ class Bogoslavskyi:
     min_size: Annotated[int, Field(ge=1, description="smallest cluster kept, points")] = 100
     main_param: ClassVar[str] = "angle_deg"
 
-    def segment(
-        self, image: RangeImage, points: np.ndarray, ground: np.ndarray | None
-    ) -> np.ndarray:
+    def segment(self, image: RangeImage, points: np.ndarray, ground: Ground | None) -> np.ndarray:
+        left_out, attached = ground_parts(ground)
         return run_kernel(
             image.ranges,
             image.elevation,
@@ -50,10 +52,10 @@ class Bogoslavskyi:
             ANGLE,
             float(np.tan(np.radians(self.angle_deg))),
             self.min_size,
-            ground,
+            left_out,
             point_weights(image),
             image.point_pixel,
-            image.attached,
+            attached,
         )
 
 
