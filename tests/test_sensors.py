@@ -388,7 +388,7 @@ def test_nuscenes_evaluate_scores_a_label_file(
     )
     assert code == 0, err
     (label,) = seg.rglob("*.label")
-    from flic_cli.io.semantickitti import instance
+    from flic_cli.labels import instance
 
     pred = instance(np.fromfile(label, dtype="<u4"))
     ids, counts = np.unique(pred[pred > 0], return_counts=True)
@@ -636,7 +636,7 @@ def test_nuscenes_root_finds_labels_through_sample_data(shared_data: Path, tmp_p
     frame = ds.load(ds.refs()[0])
     assert frame.labels is not None and frame.labels.shape[0] == frame.points.shape[0]
     from flic_cli.io.nuscenes import read_panoptic
-    from flic_cli.io.semantickitti import instance, semantic
+    from flic_cli.labels import instance, semantic
 
     full = read_panoptic(frame.ref.label_path, n)
     sem, inst = semantic(full), instance(full)
@@ -698,3 +698,19 @@ def test_frames_count_complete_revolutions_inside_a_pcap(tmp_path: Path) -> None
         np.testing.assert_array_equal(frame.image.ranges, expect)
     (only,) = open_dataset(d / "rec.pcap", frames=(1, 2)).refs()
     assert only.frame == 1
+
+
+def test_ouster_image_azimuths_match_the_points(shared_data: Path) -> None:
+    """With the per-row azimuth offsets, every valid pixel's azimuth is its point's azimuth
+    (far points, where the 14 mm beam origin offset does not matter) to a fraction of a
+    column."""
+    ds = open_dataset(shared_data / SENSORS / (OS2 + ".pcap"))
+    frame = ds.load(ds.refs()[0])
+    image = frame.image
+    assert image.has_azimuth_offset and image.one_point_per_pixel
+    far = np.linalg.norm(frame.points, axis=1) > 10
+    az_pix = image.pixel_azimuth().reshape(-1)[image.point_pixel[far]]
+    az_pts = np.arctan2(frame.points[far, 1], frame.points[far, 0])
+    d = np.abs(np.angle(np.exp(1j * (az_pix - az_pts))))
+    step = 2 * np.pi / image.shape[1]
+    assert np.percentile(d, 99) < 0.1 * step and d.max() < 0.5 * step

@@ -30,8 +30,8 @@ from flic_cli.errors import FlicInputError
 from flic_cli.io.base import Frame, FrameRef
 from flic_cli.io.pcd import cloud_geometry, kept_points
 from flic_cli.io.rings import ring_image
-from flic_cli.io.semantickitti import encode_labels
 from flic_cli.io.sensor import FileInfo, SensorFileDataset, SensorModel
+from flic_cli.labels import encode
 
 FORMAT = "nuscenes"
 SUFFIX = ".pcd.bin"
@@ -117,7 +117,7 @@ def read_panoptic(path: str | Path, n_points: int) -> np.ndarray:
         raise FlicInputError(path, f"has category {int(cat.max())}, beyond nuScenes' 32")
     sem = lut[cat]
     inst = np.where(THING_LUT[sem], data % 1000, 0)  # barrier / traffic cone: stuff here
-    return encode_labels(sem.astype(np.uint32), inst.astype(np.uint32))
+    return encode(sem.astype(np.uint32), inst.astype(np.uint32))
 
 
 def _token_labels(root: Path) -> dict[str, Path]:

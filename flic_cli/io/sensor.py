@@ -119,8 +119,7 @@ class SensorFileDataset:
         frames: tuple[int | None, int | None] | None = None,
         require_labels: bool = False,
     ) -> None:
-        from flic_cli.io.base import FrameRef, select_sequences
-        from flic_cli.io.semantickitti import frames_text, in_frames
+        from flic_cli.io.base import FrameRef, frames_text, in_frames, select_sequences
 
         self.root = Path(root)
         files = self._files(self.root)
