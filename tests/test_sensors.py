@@ -714,3 +714,38 @@ def test_ouster_image_azimuths_match_the_points(shared_data: Path) -> None:
     d = np.abs(np.angle(np.exp(1j * (az_pix - az_pts))))
     step = 2 * np.pi / image.shape[1]
     assert np.percentile(d, 99) < 0.1 * step and d.max() < 0.5 * step
+
+
+@pytest.mark.parametrize(("factory", "beams", "name"), [(0x21, 32, "HDL32E"), (0x28, 32, "VLP32C")])
+def test_velodyne_32_beam_models_from_written_packets(
+    tmp_path: Path, factory: int, beams: int, name: str
+) -> None:
+    """HDL-32E / VLP-32C packets written here (one firing of 32 lasers per block, 10 m for
+    every laser): velodyne-decoder's model from the factory byte, 32 rows ordered top to bottom
+    whatever the laser order, every return in its own pixel."""
+    step = 16  # azimuth step per firing, 0.01 deg
+    packets = []
+    az = 0
+    for k in range(int(2.3 * 36000 / step / 12)):
+        buf = bytearray()
+        for _ in range(12):
+            buf += b"\xff\xee" + struct.pack("<H", az % 36000)
+            buf += struct.pack("<HB", 5000, 100) * 32  # 5000 x 2 mm
+            az += step
+        buf += struct.pack("<IBB", 1000 * k, 0x37, factory)
+        packets.append(bytes(buf))
+    d = tmp_path / "in"
+    d.mkdir()
+    _write_pcap(d / "v32.pcap", packets, 2368)
+    ds = open_dataset(d / "v32.pcap")
+    assert ds.format == "velodyne" and len(ds.refs()) >= 1
+    model = ds.sensor(ds.refs()[0])
+    assert model.name == f"Velodyne {name}" and model.beams == beams
+    assert np.all(np.diff(model.elevation) < 0)  # row 0 = top
+    frame = ds.load(ds.refs()[0])
+    image = frame.image
+    assert image.shape[0] == beams and image.one_point_per_pixel
+    assert np.count_nonzero(image.ranges) == frame.points.shape[0] > 0.9 * 2250 * beams
+    el = np.arctan2(frame.points[:, 2], np.linalg.norm(frame.points[:, :2], axis=1))
+    row = image.point_pixel // image.shape[1]
+    assert np.abs(el - image.elevation[row]).max() < np.radians(0.3)
