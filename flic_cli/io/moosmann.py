@@ -367,6 +367,7 @@ class MoosmannDataset:
     """
 
     format = FORMAT
+    point_semantics = False
     detect = staticmethod(is_moosmann)
 
     def __init__(
@@ -413,6 +414,11 @@ class MoosmannDataset:
     def refs(self) -> list[FrameRef]:
         """Every selected frame, ordered by log then frame number."""
         return list(self._refs)
+
+    @staticmethod
+    def labelled() -> bool:
+        """False: a Moosmann log has no ground-truth labels."""
+        return False
 
     def folders(self) -> list[Path]:
         """The folders of the selected logs (outputs must not go inside them)."""

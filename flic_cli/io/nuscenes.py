@@ -230,12 +230,5 @@ class NuScenesDataset(SensorFileDataset):
             labels = read_panoptic(label_path, pts.shape[0])
             if state.keep is not None:
                 labels = labels[state.keep]
-        ref = FrameRef(self.sequence_name(info.path), k, info.path, label_path, FORMAT)
+        ref = FrameRef(self.sequence_name(info.path), k, info.path, label_path, FORMAT, index=k)
         return Frame(ref, xyz, labels, image, finite=state.keep)
-
-
-def load_labelled(ref: FrameRef) -> Frame:
-    """A labelled sweep from its reference alone (evaluation workers)."""
-    ds = NuScenesDataset(ref.path, require_labels=True)
-    (own,) = ds.refs()
-    return ds.load(own)

@@ -806,7 +806,7 @@ class OusterPcapDataset(SensorFileDataset):
         except (OusterDataError, ValueError) as exc:
             raise FlicInputError(info.path, f"frame {k} cannot be decoded ({exc})") from None
         image, points = frame_image(frame, state.meta)
-        ref = FrameRef(self.sequence_name(info.path), k, info.path, None, FORMAT)
+        ref = FrameRef(self.sequence_name(info.path), k, info.path, None, FORMAT, index=k)
         return Frame(ref, points, None, image)
 
 

@@ -269,5 +269,5 @@ class PcdDataset(SensorFileDataset):
             xyz = np.ascontiguousarray(xyz[state.keep])
         g = state.geometry
         image = ring_image(xyz, g.ring, g.column, g.width, g.elevation)
-        ref = FrameRef(self.sequence_name(info.path), k, info.path, None, FORMAT)
+        ref = FrameRef(self.sequence_name(info.path), k, info.path, None, FORMAT, index=k)
         return Frame(ref, xyz, None, image, finite=state.keep)

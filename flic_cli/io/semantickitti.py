@@ -489,6 +489,7 @@ class SemanticKittiDataset:
     """
 
     format = FORMAT
+    point_semantics = True
     detect = staticmethod(is_semantickitti)
 
     def __init__(
@@ -550,6 +551,10 @@ class SemanticKittiDataset:
         """Every selected frame, ordered by sequence then frame number."""
         return list(self._refs)
 
+    def labelled(self) -> bool:
+        """Whether some selected frame has a ``labels/<XXXXXX>.label`` file."""
+        return any(r.label_path is not None for r in self._refs)
+
     def folders(self) -> list[Path]:
         """The folders of the selected sequences (outputs must not go inside them)."""
         return sorted({r.path.parents[1] for r in self._refs})
@@ -584,4 +589,7 @@ class SemanticKittiDataset:
     def load(self, ref: FrameRef) -> Frame:
         """Read one frame (points with non-finite coordinates dropped, with a warning)."""
         scan = read_scan(ref.path, ref.label_path)
-        return Frame(ref, scan.points, scan.labels, finite=scan.finite)
+        stored = None
+        if scan.finite is not None and ref.label_path is not None:  # rare: re-read all labels
+            stored = read_label(ref.label_path, scan.finite.size)
+        return Frame(ref, scan.points, scan.labels, finite=scan.finite, stored_labels=stored)
