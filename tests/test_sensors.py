@@ -749,3 +749,29 @@ def test_velodyne_32_beam_models_from_written_packets(
     el = np.arctan2(frame.points[:, 2], np.linalg.norm(frame.points[:, :2], axis=1))
     row = image.point_pixel // image.shape[1]
     assert np.abs(el - image.elevation[row]).max() < np.radians(0.3)
+
+
+def test_organised_pcd_keeps_its_rows_and_columns(tmp_path: Path) -> None:
+    """An organised cloud (HEIGHT rows of WIDTH points, NaN where no return, no ring field):
+    the image is HEIGHT x WIDTH, every point in the pixel of its row and its azimuth's column."""
+    from pypcd4 import MetaData, PointCloud
+
+    xyz, ring, az = _ring_cloud(16, 900)
+    order = np.lexsort((-az, -ring))  # top ring first, azimuth decreasing along the row
+    xyz, ring, az = xyz[order], ring[order], az[order]
+    gone = np.random.default_rng(2).random(xyz.shape[0]) < 0.1
+    xyz[gone] = np.nan
+    data = np.empty(xyz.shape[0], dtype=[("x", "<f4"), ("y", "<f4"), ("z", "<f4")])
+    data["x"], data["y"], data["z"] = xyz.T
+    meta = MetaData.model_validate(
+        {"fields": ("x", "y", "z"), "size": (4, 4, 4), "type": ("F", "F", "F"),
+         "count": (1, 1, 1), "points": xyz.shape[0], "width": 900, "height": 16}
+    )  # fmt: skip
+    path = tmp_path / "organised.pcd"
+    PointCloud(meta, data).save(path)
+    ds = open_dataset(path)
+    frame = ds.load(ds.refs()[0])
+    assert frame.image.shape == (16, 900) and frame.n_read == 16 * 900
+    assert frame.points.shape[0] == int((~gone).sum())
+    expect = (15 - ring) * 900 + np.floor((np.pi - az) / (2 * np.pi) * 900).astype(int) % 900
+    np.testing.assert_array_equal(frame.image.point_pixel, expect[~gone])
