@@ -209,3 +209,39 @@ def test_cli_writes_a_profile_that_evaluate_reads(tmp_path: Path) -> None:
     assert result.exit_code == 0, result.output
     objects = (tmp_path / "e" / "per_object.csv").read_text().splitlines()
     assert len(objects) > 5  # header + the frame's objects of at least 100 points
+
+
+def test_bridge_parameters_follow_the_beam_gap() -> None:
+    """Bridge's far link distance covers adjacent beams on a facing surface by the rule's margin;
+    only the VLP-16 (2 deg beams) needs more than the defaults."""
+    from flic_cli.methods.bridge import Bridge
+    from flic_cli.sample.sensor import (
+        BRIDGE_GAPS_PER_GAMMA,
+        bridge_parameters,
+        street_beam_gap_deg,
+    )
+
+    for name, p in sample.SENSOR_PROFILES.items():
+        derived = bridge_parameters(p.pitch_deg)
+        gamma = derived.get("gamma_deg", Bridge.gamma_deg)
+        gap = np.radians(street_beam_gap_deg(p.pitch_deg))
+        # d sin(gamma) against the gap 2 d sin(gap / 2) of a surface facing the sensor
+        margin = np.sin(np.radians(gamma)) / (2.0 * np.sin(gap / 2.0))
+        assert margin >= BRIDGE_GAPS_PER_GAMMA * 0.99, name
+        assert (name == "vlp16") == bool(derived), name
+    # the VLP-16's beams are 2 deg apart: the defaults' d sin(2 deg) is just one gap
+    assert street_beam_gap_deg(sample.SENSOR_PROFILES["vlp16"].pitch_deg) == pytest.approx(2.0)
+    assert np.sin(np.radians(2.0)) < 2.0 * np.sin(np.radians(1.0))
+    derived = bridge_parameters(sample.SENSOR_PROFILES["vlp16"].pitch_deg)
+    assert derived == {"gamma_deg": 3.0, "threshold_m": 0.52}  # 10 m sin(3 deg) = 0.523 m
+
+
+def test_sensor_toml_carries_the_derived_bridge(tmp_path: Path) -> None:
+    from flic_cli.methods.bridge import Bridge
+
+    v16 = sample.write_sample(tmp_path / "v16", frames=1, sensor="vlp16")
+    bridge = load_config(v16.config).methods["bridge"].method
+    assert (bridge.gamma_deg, bridge.threshold_m, bridge.reach_px) == (3.0, 0.52, Bridge.reach_px)
+    h32 = sample.write_sample(tmp_path / "h32", frames=1, sensor="hdl32e")
+    assert "[methods" not in h32.config.read_text()
+    assert load_config(h32.config).methods["bridge"].method == Bridge()

@@ -38,6 +38,8 @@ from flic_cli.io import (
 )
 from flic_cli.sample.render import render_kitti
 from flic_cli.sample.sensor import (
+    BRIDGE_GAPS_PER_GAMMA,
+    BRIDGE_SWITCH_M,
     DEFAULT_SENSOR,
     EGO_VEHICLE,
     HDL64_PITCH_DEG,
@@ -45,8 +47,10 @@ from flic_cli.sample.sensor import (
     MOOSMANN_WIDTH,
     SENSOR_PROFILES,
     SensorProfile,
+    bridge_parameters,
     cast,
     moosmann_azimuths,
+    street_beam_gap_deg,
 )
 from flic_cli.sample.street import FPS, make_scene
 
@@ -176,7 +180,7 @@ def sensor_toml(profile: SensorProfile, width: int | None = None) -> str:
     width = profile.width if width is None else int(width)
     elev = ", ".join(f"{-p:.3f}" for p in profile.pitch_deg)
     lo, hi = profile.vertical_fov_deg
-    return (
+    text = (
         f"{SENSOR_TOML_MARK}{profile.name}: synthetic {profile.title} street, "
         f"{profile.beams} beams x {width} columns, elevation {lo:+.2f} .. {hi:+.2f} deg\n"
         f"# beam table: {profile.source}\n"
@@ -188,6 +192,17 @@ def sensor_toml(profile: SensorProfile, width: int | None = None) -> str:
         f"rows = {profile.beams}\n"
         f"width = {width}\n"
     )
+    bridge = bridge_parameters(profile.pitch_deg)
+    if bridge:
+        gap = street_beam_gap_deg(profile.pitch_deg)
+        text += (
+            "\n# Bridge's link distances from the beam gap (flic_cli.sample.sensor."
+            "bridge_parameters):\n"
+            f"# gamma = max(2 deg, {BRIDGE_GAPS_PER_GAMMA:g} x {gap:.3f} deg), threshold = "
+            f"max(0.35 m, {BRIDGE_SWITCH_M:g} m x sin(gamma))\n"
+            "[methods.bridge]\n" + "".join(f"{k} = {v!r}\n" for k, v in bridge.items())
+        )
+    return text
 
 
 def _write_files(
