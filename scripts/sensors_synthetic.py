@@ -149,21 +149,26 @@ def plot(combined: pd.DataFrame, path: Path) -> None:
         key=lambda s: (SENSOR_PROFILES[s].beams, SENSOR_PROFILES[s].width),
     )
     settings = [s for s in ("no-ground", "ground") if s in set(combined["setting"])]
-    fig, axes = plt.subplots(1, len(settings), figsize=(6.5 * len(settings), 4.8), squeeze=False)
+    fig, axes = plt.subplots(1, len(settings), figsize=(6.5 * len(settings), 5.4), squeeze=False)
     labels = [f"{s}\n{SENSOR_PROFILES[s].beams}x{SENSOR_PROFILES[s].width}" for s in order]
+    methods = list(dict.fromkeys(combined["method"]))
+    colours = plt.get_cmap("tab20")
     for ax, setting in zip(axes[0], settings, strict=True):
         sub = combined[combined["setting"] == setting]
-        for method in sub["method"].unique():
+        for i, method in enumerate(methods):
             m = sub[sub["method"] == method].set_index("sensor").reindex(order)
             style = "-" if method in ("bridge", "dbscan") else "--"
-            width = 2.4 if method in ("bridge", "dbscan") else 1.2
-            ax.plot(range(len(order)), m["iou_mu"], style, marker="o", lw=width, label=method)
+            width = 2.6 if method in ("bridge", "dbscan") else 1.1
+            colour = colours(i % 20)
+            ax.plot(range(len(order)), m["iou_mu"], style, marker="o", lw=width, label=method,
+                    color=colour)  # fmt: skip
         ax.set_xticks(range(len(order)), labels, fontsize=8)
         ax.set_ylabel("IoU_mu (%)")
         ax.set_title(f"synthetic street, {setting} setting")
         ax.grid(alpha=0.3)
-    axes[0][-1].legend(fontsize=7, ncol=2, loc="lower right")
-    fig.tight_layout()
+    handles, names = axes[0][0].get_legend_handles_labels()
+    fig.legend(handles, names, fontsize=8, ncol=min(len(names), 6), loc="lower center")
+    fig.tight_layout(rect=(0, 0.1, 1, 1))
     save_figure(fig, path)
 
 
