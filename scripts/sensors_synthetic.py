@@ -21,7 +21,8 @@ Usage (from the repository root, ``../shared`` not needed)::
     python scripts/sensors_synthetic.py --gather-only --out results/sensors-synthetic
 
 ``--methods`` (default: the config's default methods) and ``--sensors`` choose a subset;
-``--extra-config FILE`` is laid over every sensor's ``sensor.toml`` (a sweep's variants).
+``--extra-config FILE`` is laid over every sensor's ``sensor.toml`` (a sweep's variants);
+``--ground-remover NAME`` sets the ground setting's remover (default: the paper's).
 """
 
 from __future__ import annotations
@@ -62,7 +63,13 @@ def _merged_config(sample_config: Path | None, extra: Path | None, dest: Path) -
 
 
 def run_sensor(
-    name: str, frames: int, work: Path, out: Path, methods: str | None, extra: Path | None
+    name: str,
+    frames: int,
+    work: Path,
+    out: Path,
+    methods: str | None,
+    extra: Path | None,
+    ground_remover: str | None = None,
 ) -> None:
     """Write the sensor's street, evaluate it, and the paired differences, into ``out/<name>``."""
     paths = write_sample(work / name, frames=frames, seed=0, sensor=name)
@@ -73,6 +80,8 @@ def run_sensor(
         cmd += ["--config", str(config)]
     if methods:
         cmd += ["--methods", methods]
+    if ground_remover:
+        cmd += ["--ground-remover", ground_remover]
     print("$", " ".join(cmd), flush=True)
     subprocess.run(cmd, check=True)
     script = Path(__file__).with_name("paired_differences.py")
@@ -180,13 +189,22 @@ def main() -> None:
     ap.add_argument("--sensors", default=",".join(SENSOR_PROFILES))
     ap.add_argument("--methods", default=None)
     ap.add_argument("--extra-config", type=Path, default=None)
+    ap.add_argument("--ground-remover", default=None, help="of the ground setting (default: paper)")
     ap.add_argument("--gather-only", action="store_true")
     args = ap.parse_args()
     if not args.gather_only:
         for name in args.sensors.split(","):
             if name not in SENSOR_PROFILES:
                 raise SystemExit(f"unknown sensor {name!r}; one of {', '.join(SENSOR_PROFILES)}")
-            run_sensor(name, args.frames, args.work, args.out, args.methods, args.extra_config)
+            run_sensor(
+                name,
+                args.frames,
+                args.work,
+                args.out,
+                args.methods,
+                args.extra_config,
+                args.ground_remover,
+            )
     args.out.mkdir(parents=True, exist_ok=True)
     write_table(args.out / "geometry.csv", geometry())
     combined = gather(args.out)

@@ -215,25 +215,34 @@ def test_bridge_parameters_follow_the_beam_gap() -> None:
     """Bridge's far link distance covers adjacent beams on a facing surface by the rule's margin;
     only the VLP-16 (2 deg beams) needs more than the defaults."""
     from flic_cli.methods.bridge import Bridge
-    from flic_cli.sample.sensor import (
+    from flic_cli.sensor_params import (
         BRIDGE_GAPS_PER_GAMMA,
         bridge_parameters,
         street_beam_gap_deg,
     )
 
-    for name, p in sample.SENSOR_PROFILES.items():
-        derived = bridge_parameters(p.pitch_deg)
+    def elevation(name: str) -> np.ndarray:
+        return -np.radians(sample.SENSOR_PROFILES[name].pitch_deg)
+
+    for name in sample.SENSOR_PROFILES:
+        derived = bridge_parameters(elevation(name))
         gamma = derived.get("gamma_deg", Bridge.gamma_deg)
-        gap = np.radians(street_beam_gap_deg(p.pitch_deg))
+        gap = np.radians(street_beam_gap_deg(elevation(name)))
         # d sin(gamma) against the gap 2 d sin(gap / 2) of a surface facing the sensor
         margin = np.sin(np.radians(gamma)) / (2.0 * np.sin(gap / 2.0))
         assert margin >= BRIDGE_GAPS_PER_GAMMA * 0.99, name
         assert (name == "vlp16") == bool(derived), name
     # the VLP-16's beams are 2 deg apart: the defaults' d sin(2 deg) is just one gap
-    assert street_beam_gap_deg(sample.SENSOR_PROFILES["vlp16"].pitch_deg) == pytest.approx(2.0)
+    assert street_beam_gap_deg(elevation("vlp16")) == pytest.approx(2.0)
     assert np.sin(np.radians(2.0)) < 2.0 * np.sin(np.radians(1.0))
-    derived = bridge_parameters(sample.SENSOR_PROFILES["vlp16"].pitch_deg)
+    derived = bridge_parameters(elevation("vlp16"))
     assert derived == {"gamma_deg": 3.0, "threshold_m": 0.52}  # 10 m sin(3 deg) = 0.523 m
+    # the order of the beams does not matter; the sky beams (above +3 deg) do not count
+    assert bridge_parameters(elevation("vlp16")[::-1]) == derived
+    sky = np.radians([30.0, 20.0, 10.0])
+    assert bridge_parameters(np.concatenate([sky, elevation("hdl64e")])) == {}
+    with pytest.raises(ValueError, match="fewer than two beams"):
+        street_beam_gap_deg(sky)
 
 
 def test_sensor_toml_carries_the_derived_bridge(tmp_path: Path) -> None:

@@ -26,7 +26,6 @@ __all__ = [
     "MOOSMANN_WIDTH",
     "SENSOR_PROFILES",
     "SensorProfile",
-    "bridge_parameters",
     "cast",
     "cast_full",
     "kitti_azimuths",
@@ -207,59 +206,6 @@ SENSOR_PROFILES: dict[str, SensorProfile] = {
         ),
     )
 }
-
-
-#: Bridge's link distances on another sensor: its far angle ``gamma`` at least this many times
-#: the beams' gap (see :func:`bridge_parameters`).
-BRIDGE_GAPS_PER_GAMMA = 1.5
-#: ... and its near distance ``threshold_m`` the far one at this range, metres (as the defaults:
-#: 0.35 m = 10 m sin 2 deg).
-BRIDGE_SWITCH_M = 10.0
-#: Beams at or below this elevation (degrees) see the street's objects; their median gap is the
-#: sensor's beam gap for :func:`bridge_parameters`.
-STREET_ELEVATION_DEG = 3.0
-
-
-def street_beam_gap_deg(pitch_deg: np.ndarray) -> float:
-    """Median elevation gap between adjacent beams at or below :data:`STREET_ELEVATION_DEG`
-    (the beams that see a street's objects from a car's roof), degrees."""
-    pitch = np.sort(np.asarray(pitch_deg, dtype=np.float64))
-    gaps = np.diff(pitch)[-pitch[1:] <= STREET_ELEVATION_DEG]
-    return float(np.median(gaps))
-
-
-def bridge_parameters(pitch_deg: np.ndarray) -> dict[str, float]:
-    """Bridge's link distances for a beam table, where its defaults cannot link adjacent beams.
-
-    Bridge links two measurements closer than ``max(threshold_m, d sin(gamma_deg))``. Two beams
-    ``g`` degrees apart hit a surface facing the sensor at range ``d`` about ``2 d sin(g / 2)``
-    apart: with the defaults (2 deg, 0.35 m: chosen on the HDL-64E, whose beams are 0.33-0.52 deg
-    apart) the far link distance is 4-6 beam gaps, but on a VLP-16 (2 deg) it is exactly one,
-    so that no object beyond 10 m keeps two rows together (``results/sensors-synthetic/
-    vertical_links.csv``). So ``gamma`` becomes at least :data:`BRIDGE_GAPS_PER_GAMMA` times the
-    sensor's beam gap (:func:`street_beam_gap_deg`), and ``threshold_m`` the far link distance at
-    :data:`BRIDGE_SWITCH_M`, as the defaults are; on sensors whose beams are at most 1.33 deg apart
-    (every other profile) nothing changes.
-
-    Parameters
-    ----------
-    pitch_deg : (H,) beam pitch, degrees (positive = downward), any order.
-
-    Returns
-    -------
-    ``{"gamma_deg": ..., "threshold_m": ...}`` where they differ from Bridge's defaults; empty
-    where the defaults hold.
-    """
-    from flic_cli.methods.bridge import Bridge
-
-    gap = street_beam_gap_deg(pitch_deg)
-    gamma = round(max(Bridge.gamma_deg, BRIDGE_GAPS_PER_GAMMA * gap), 2)
-    if gamma <= Bridge.gamma_deg:
-        return {}
-    threshold = round(
-        max(Bridge.threshold_m, BRIDGE_SWITCH_M * float(np.sin(np.radians(gamma)))), 2
-    )
-    return {"gamma_deg": gamma, "threshold_m": threshold}
 
 
 #: No return beyond this range (metres).

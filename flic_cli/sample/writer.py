@@ -38,8 +38,6 @@ from flic_cli.io import (
 )
 from flic_cli.sample.render import render_kitti
 from flic_cli.sample.sensor import (
-    BRIDGE_GAPS_PER_GAMMA,
-    BRIDGE_SWITCH_M,
     DEFAULT_SENSOR,
     EGO_VEHICLE,
     HDL64_PITCH_DEG,
@@ -47,12 +45,16 @@ from flic_cli.sample.sensor import (
     MOOSMANN_WIDTH,
     SENSOR_PROFILES,
     SensorProfile,
-    bridge_parameters,
     cast,
     moosmann_azimuths,
-    street_beam_gap_deg,
 )
 from flic_cli.sample.street import FPS, make_scene
+from flic_cli.sensor_params import (
+    BRIDGE_GAPS_PER_GAMMA,
+    BRIDGE_SWITCH_M,
+    bridge_parameters,
+    street_beam_gap_deg,
+)
 
 __all__ = ["SamplePaths", "default_sample_dir", "ensure_sample", "write_sample"]
 
@@ -192,11 +194,12 @@ def sensor_toml(profile: SensorProfile, width: int | None = None) -> str:
         f"rows = {profile.beams}\n"
         f"width = {width}\n"
     )
-    bridge = bridge_parameters(profile.pitch_deg)
+    elevation = -np.radians(profile.pitch_deg)
+    bridge = bridge_parameters(elevation)
     if bridge:
-        gap = street_beam_gap_deg(profile.pitch_deg)
+        gap = street_beam_gap_deg(elevation)
         text += (
-            "\n# Bridge's link distances from the beam gap (flic_cli.sample.sensor."
+            "\n# Bridge's link distances from the beam gap (flic_cli.sensor_params."
             "bridge_parameters):\n"
             f"# gamma = max(2 deg, {BRIDGE_GAPS_PER_GAMMA:g} x {gap:.3f} deg), threshold = "
             f"max(0.35 m, {BRIDGE_SWITCH_M:g} m x sin(gamma))\n"
