@@ -42,6 +42,11 @@ FORMATS: dict[str, Entry] = {
         "flic_cli.io.moosmann:MoosmannDataset",
         "a Moosmann log (img.cfg + scanNNNNN.png 16-bit range images) or a folder of logs",
     ),
+    "bag": Entry(
+        "flic_cli.io.bag:BagDataset",
+        "a ROS 1 .bag, ROS 2 bag (folder or .db3, .mcap) or MCAP file: PointCloud2, "
+        "VelodyneScan or Ouster packets",
+    ),
 }
 
 #: Method kinds (the ``kind`` of a ``[methods.NAME]`` config table).
