@@ -248,7 +248,7 @@ def ring_image(xyz: np.ndarray, ring: np.ndarray, beams: Beams) -> tuple[RangeIm
     """
     xyz = np.ascontiguousarray(xyz, dtype=np.float32)
     ring = np.ascontiguousarray(ring)
-    if ring.dtype.kind not in "iu":
+    if ring.dtype.kind not in "iu" or not ring.dtype.isnative:  # float or big-endian rings
         ring = ring.astype(np.int64)
     ranges, counts, z, pix, kept = _ring_kernel(
         xyz, ring, beams.row_of_ring, beams.rows, beams.width
