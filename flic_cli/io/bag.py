@@ -55,9 +55,11 @@ SUFFIXES = (".bag", ".mcap", ".db3")
 POINTCLOUD2 = "sensor_msgs/msg/PointCloud2"
 VELODYNE_SCAN = "velodyne_msgs/msg/VelodyneScan"
 OUSTER_PACKET = "ouster_ros/msg/PacketMsg"
+#: ouster-ros 0.11+ on ROS 2 names the same message ouster_sensor_msgs/msg/PacketMsg.
+OUSTER_PACKET_2 = "ouster_sensor_msgs/msg/PacketMsg"
 STRING = "std_msgs/msg/String"
 #: Message types that carry LiDAR revolutions.
-LIDAR_TYPES = (POINTCLOUD2, VELODYNE_SCAN, OUSTER_PACKET)
+LIDAR_TYPES = (POINTCLOUD2, VELODYNE_SCAN, OUSTER_PACKET, OUSTER_PACKET_2)
 
 #: Definitions of driver messages that ROS 2 bags do not store (rosbag2 metadata version < 8):
 #: velodyne_msgs (ros-drivers/velodyne, also written by tier4/nebula), ouster_ros.
@@ -67,6 +69,7 @@ EXTRA_TYPES: dict[str, str] = {
         "std_msgs/Header header\nvelodyne_msgs/VelodynePacket[] packets\n"
     ),
     "ouster_ros/msg/PacketMsg": "uint8[] buf\n",
+    "ouster_sensor_msgs/msg/PacketMsg": "uint8[] buf\n",
 }
 
 
@@ -162,7 +165,7 @@ def _lidar_connections(reader: Any, path: Path) -> list[tuple[str, list[Any]]]:
             by_topic.setdefault(c.topic, []).append(c)
     out = []
     for topic, conns in sorted(by_topic.items()):
-        if conns[0].msgtype == OUSTER_PACKET:
+        if conns[0].msgtype in (OUSTER_PACKET, OUSTER_PACKET_2):
             first = next(reader.messages(connections=conns), None)
             if first is None or len(first[2]) < 1024:
                 continue
@@ -255,7 +258,9 @@ class BagDataset:
             self._conn_ids = {c.id for c in conns}
             self.sequence = safe_name(self.topic)
             self._metadata = (
-                self._ouster_metadata(reader) if self.msgtype == OUSTER_PACKET else None
+                self._ouster_metadata(reader)
+                if self.msgtype in (OUSTER_PACKET, OUSTER_PACKET_2)
+                else None
             )
             self._slots = self._index(reader, conns)
             all_frames = len(self._slots)
@@ -356,6 +361,13 @@ class BagDataset:
             others = {c.topic: c.msgtype for c in reader.connections}
             if wanted in others or "/" + wanted.lstrip("/") in others:
                 name = wanted if wanted in others else "/" + wanted.lstrip("/")
+                if others[name] not in reader.typestore.types:
+                    raise FlicInputError(
+                        self.root,
+                        f"topic {name}: the bag stores no message definition of {others[name]} "
+                        "and flic knows none (flic reads "
+                        f"{', '.join(LIDAR_TYPES)})",
+                    )
                 raise FlicInputError(
                     self.root,
                     f"topic {name}: {others[name]} is not a LiDAR message type flic reads "
@@ -428,7 +440,7 @@ class BagDataset:
 
     def _index(self, reader: Any, conns: list[Any]) -> list[_Slot]:
         """Where every revolution lies: one slot per message, or per Ouster frame id."""
-        if self.msgtype != OUSTER_PACKET:
+        if self.msgtype not in (OUSTER_PACKET, OUSTER_PACKET_2):
             return [_Slot(t, t) for _, t, _ in self._messages(reader, conns)]
         from flic_cli.io import ouster
 
@@ -458,7 +470,7 @@ class BagDataset:
             it = self._messages(reader, conns, slot.start, None)
             if cursor is not None:
                 cursor.messages, cursor.pending = it, None
-        if self.msgtype == OUSTER_PACKET:
+        if self.msgtype in (OUSTER_PACKET, OUSTER_PACKET_2):
             frame = self._ouster_frame(reader, ref, slot, it, cursor)
         else:
             item = cursor.pending if cursor is not None and cursor.pending else None
