@@ -42,6 +42,14 @@ FORMATS: dict[str, Entry] = {
         "flic_cli.io.moosmann:MoosmannDataset",
         "a Moosmann log (img.cfg + scanNNNNN.png 16-bit range images) or a folder of logs",
     ),
+    "ouster": Entry(
+        "flic_cli.io.ouster:OusterPcapDataset",
+        "an Ouster pcap with its metadata JSON beside it, or a folder of them",
+    ),
+    "velodyne": Entry(
+        "flic_cli.io.velodyne:VelodynePcapDataset",
+        "a Velodyne pcap (VLP-16, VLP-32C, HDL-32E, HDL-64E, ...), or a folder of them",
+    ),
     "bag": Entry(
         "flic_cli.io.bag:BagDataset",
         "a ROS 1 .bag, ROS 2 bag (folder or .db3, .mcap) or MCAP file: PointCloud2, "
