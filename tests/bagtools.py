@@ -109,12 +109,12 @@ def write_bag(path: Path, kind: str, messages: list[tuple[str, str, int, Any]]) 
 def vlp16_clouds(shared: Path, n: int = 4) -> list[np.ndarray]:
     """Real VLP-16 revolutions (velodyne-decoder's points of the shared nebula bag), as
     structured arrays x y z intensity time ring."""
-    from flic_cli.io.bag import BagDataset
+    from flic_cli.io.bag import open_reader
 
-    ds = BagDataset(shared / "sensors/velodyne/nebula_vlp16/1673400471837873222")
     out = []
-    reader = __import__("flic_cli.io.bag", fromlist=["open_reader"]).open_reader(ds.root)
+    reader = open_reader(shared / "sensors/velodyne/nebula_vlp16/1673400471837873222")
     try:
+        from flic_cli.io import velodyne
         from flic_cli.io.bag import _velodyne_points
 
         for c, _, raw in reader.messages():
@@ -123,7 +123,8 @@ def vlp16_clouds(shared: Path, n: int = 4) -> list[np.ndarray]:
                 (p.stamp.sec + p.stamp.nanosec * 1e-9, np.asarray(p.data, np.uint8))
                 for p in msg.packets
             ]
-            out.append(_velodyne_points(packets))
+            sensor = velodyne.detect_sensor([bytes(packets[0][1])])
+            out.append(_velodyne_points(sensor, packets))
             if len(out) == n:
                 break
     finally:

@@ -209,7 +209,7 @@ def test_vlp16_bag_agrees_with_nebula_reference(shared_data):
         assert np.mean(d < 0.02) > 0.97
         assert np.percentile(d, 99) < 0.03
     # rows: 16 beams, 15 of them lit (ring 0 returns nothing in this recording)
-    assert frame.image.shape == (16, 1800)
+    assert frame.image.shape[0] == 16 and ds.sensor.name == "Velodyne VLP16"
     lit = (frame.image.ranges > 0).any(axis=1)
     assert lit.sum() == 15 and not lit[-1]  # the empty ring is the lowest beam (bottom row)
     # every decoded point is in the image; pixels hold the nearest of their points
@@ -217,6 +217,27 @@ def test_vlp16_bag_agrees_with_nebula_reference(shared_data):
     # an other message is not this revolution: much worse agreement
     other, _ = cKDTree(ds.load(ds.refs()[0]).points).query(ref)
     assert np.median(other) > np.median(d_ref)
+
+
+def test_ouster_packet_bag_gives_ouster_sdks_frame(shared_data):
+    """The shared OS-0-128 bag: metadata from its own topic, one complete frame (frame id
+    1798), 128 x 512, 28,751 valid pixels (ouster-sdk 1.0.1's count, data README)."""
+    bag = shared_data / "sensors/ouster/512x10_raw.bag"
+    info = {t.topic: t for t in topics(bag)}
+    assert info["/os_node0/lidar_packets"].lidar and not info["/os_node0/imu_packets"].lidar
+    assert info["/os_node0/lidar_packets"].count == 32
+    ds = open_dataset(bag)
+    assert ds.topic == "/os_node0/lidar_packets"
+    assert [r.frame for r in ds.refs()] == [0]
+    frame = ds.load(ds.refs()[0])
+    assert frame.image.shape == (128, 512)
+    assert int(np.count_nonzero(frame.image.ranges)) == frame.points.shape[0] == 28751
+    assert ds.sensor.name == "Ouster OS-0-128"
+    assert frame.intensity.shape == (28751,) and frame.intensity.max() > 0
+    # the points lie at their pixels' ranges (beam origin offset 27.67 mm aside)
+    r = np.linalg.norm(frame.points.astype(np.float64), axis=1)
+    pix_r = frame.image.ranges.reshape(-1)[frame.image.point_pixel]
+    assert np.median(np.abs(r - pix_r)) < 0.03
 
 
 def test_vlp16_bag_header_and_topics(shared_data):

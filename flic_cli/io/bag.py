@@ -26,6 +26,7 @@ bag's length.
 
 from __future__ import annotations
 
+import json
 import re
 import warnings
 from collections.abc import Iterator
@@ -257,11 +258,10 @@ class BagDataset:
             self.msgtype = conns[0].msgtype
             self._conn_ids = {c.id for c in conns}
             self.sequence = safe_name(self.topic)
-            self._metadata = (
-                self._ouster_metadata(reader)
-                if self.msgtype in (OUSTER_PACKET, OUSTER_PACKET_2)
-                else None
-            )
+            self._is_ouster = self.msgtype in (OUSTER_PACKET, OUSTER_PACKET_2)
+            self._meta = self._ouster_metadata(reader) if self._is_ouster else None
+            self._frame_id = "os_sensor"
+            self.partial_frames = 0
             self._slots = self._index(reader, conns)
             all_frames = len(self._slots)
             start, stop = frames or (None, None)
@@ -274,6 +274,8 @@ class BagDataset:
                 )
             self._selected = list(sel)
             self.beams: Beams | None = None
+            self.sensor: Any = None  # the SensorModel of packet topics
+            self._velodyne: Any = None
             first = self._read_frame(reader, self._selected[0], conns)
             self.beams = self._beams_of(first)
         finally:
@@ -392,14 +394,22 @@ class BagDataset:
             )
         return lidar[0]
 
-    def _ouster_metadata(self, reader: Any) -> str:
+    def _ouster_metadata(self, reader: Any) -> Any:
         """The sensor metadata JSON of an Ouster packet bag (its ``std_msgs/String`` topic
         named ``.../metadata``)."""
         conns = [
             c for c in reader.connections if c.msgtype == STRING and c.topic.endswith("metadata")
         ]
+        from flic_cli.io import ouster
+
         for c, _, raw in reader.messages(connections=conns):
-            return str(self._deserialize(reader, raw, c).data)
+            text = str(self._deserialize(reader, raw, c).data)
+            try:
+                return ouster.OusterMeta.from_json(json.loads(text))
+            except (json.JSONDecodeError, ouster.OusterDataError) as exc:
+                raise FlicInputError(
+                    self.root, f"topic {c.topic}: the Ouster metadata is not usable ({exc})"
+                ) from None
         raise FlicInputError(
             self.root,
             f"topic {self.topic}: Ouster packets need the sensor metadata, and the bag has no "
@@ -439,24 +449,44 @@ class BagDataset:
             yield item
 
     def _index(self, reader: Any, conns: list[Any]) -> list[_Slot]:
-        """Where every revolution lies: one slot per message, or per Ouster frame id."""
-        if self.msgtype not in (OUSTER_PACKET, OUSTER_PACKET_2):
+        """Where every revolution lies: one slot per message, or per complete Ouster frame
+        (packets of one frame id that fill every column; partial ones at the start and end of a
+        recording are left out, as the pcap reader does)."""
+        if not self._is_ouster:
             return [_Slot(t, t) for _, t, _ in self._messages(reader, conns)]
         from flic_cli.io import ouster
 
-        info = ouster.parse_metadata(self._metadata, self.root)
+        meta = self._meta
         slots: list[_Slot] = []
-        current, first, last = None, 0, 0
+        bufs: list[bytes] = []
+        current, first, last = -1, 0, 0
+
+        def finish() -> None:
+            try:
+                (frame,) = ouster.decode_frames(bufs, meta)
+            except ouster.OusterDataError as exc:
+                raise FlicInputError(self.root, f"topic {self.topic}: {exc}") from None
+            if frame.complete:
+                slots.append(_Slot(first, last, current))
+            else:
+                self.partial_frames += 1
+
         for c, t, raw in self._messages(reader, conns):
             buf = _packet_buf(self._deserialize(reader, raw, c))
-            fid = ouster.packet_frame_id(buf, info)
-            if fid != current:
-                if current is not None:
-                    slots.append(_Slot(first, last, current))
+            try:
+                ouster.check_packet(buf, meta)
+            except ouster.OusterDataError as exc:
+                raise FlicInputError(self.root, f"topic {self.topic}: {exc}") from None
+            fid = ouster._frame_id(buf, meta)
+            if bufs and fid != current:
+                finish()
+                bufs = []
+            if not bufs:
                 current, first = fid, t
+            bufs.append(buf)
             last = t
-        if current is not None:
-            slots.append(_Slot(first, last, current))
+        if bufs:
+            finish()
         return slots
 
     def _read_frame(
@@ -470,7 +500,7 @@ class BagDataset:
             it = self._messages(reader, conns, slot.start, None)
             if cursor is not None:
                 cursor.messages, cursor.pending = it, None
-        if self.msgtype in (OUSTER_PACKET, OUSTER_PACKET_2):
+        if self._is_ouster:
             frame = self._ouster_frame(reader, ref, slot, it, cursor)
         else:
             item = cursor.pending if cursor is not None and cursor.pending else None
@@ -517,54 +547,68 @@ class BagDataset:
         return self._frame(ref, xyz, ring, intensity, stamp, str(header.frame_id))
 
     def _velodyne_frame(self, ref: FrameRef, msg: Any) -> BagFrame:
+        """A VelodyneScan message (one revolution of packets) decoded by
+        :mod:`flic_cli.io.velodyne`: its sensor model (velodyne-decoder's calibration) and
+        image (:func:`flic_cli.io.velodyne.scan_image`)."""
+        from flic_cli.io import velodyne
+
         packets = [
             (int(p.stamp.sec) + int(p.stamp.nanosec) * 1e-9, np.asarray(p.data, dtype=np.uint8))
             for p in msg.packets
         ]
+        if not packets:
+            raise FlicInputError(self.root, f"topic {self.topic}: message {ref.frame} is empty")
+        if self._velodyne is None:
+            self._velodyne = velodyne.detect_sensor([bytes(packets[0][1])])
         try:
-            cloud = _velodyne_points(packets)
+            cloud = _velodyne_points(self._velodyne, packets)
         except (RuntimeError, ValueError) as exc:
             raise FlicInputError(
                 self.root, f"topic {self.topic}: Velodyne packets cannot be decoded ({exc})"
             ) from None
-        xyz = np.ascontiguousarray(np.stack([cloud["x"], cloud["y"], cloud["z"]], axis=1))
-        ring = cloud["ring"]
-        if self.beams is None:
-            self.beams = estimate_beams(xyz, ring, None, "velodyne-decoder rings")
+        if self.sensor is None:
+            self.sensor = self._velodyne.sensor_model(int(cloud["column"].max()) + 1)
+        image, xyz = velodyne.scan_image(cloud, self.sensor)
         header = msg.header
         stamp = int(header.stamp.sec) * 1_000_000_000 + int(header.stamp.nanosec)
-        return self._frame(ref, xyz.astype(np.float32), ring, cloud["intensity"], stamp,
-                           str(header.frame_id))  # fmt: skip
+        intensity = np.asarray(cloud["intensity"], dtype=np.float32)
+        return BagFrame(ref, xyz, None, image, None, stamp, str(header.frame_id), intensity)
 
     def _ouster_frame(
         self, reader: Any, ref: FrameRef, slot: _Slot, it: Iterator, cursor: _Cursor | None
     ) -> BagFrame:
+        """The packets of the slot's frame id decoded by :mod:`flic_cli.io.ouster` (its
+        destaggered image and the sensor's geometry); intensity = reflectivity."""
         from flic_cli.io import ouster
 
-        info = ouster.parse_metadata(self._metadata, self.root)
+        meta = self._meta
         bufs = []
         pending = cursor.pending if cursor is not None else None
         while True:
             item = pending if pending is not None else next(it, None)
             pending = None
-            if item is None:
+            if item is None or item[1] > slot.stop:
+                pending = item
                 break
-            c, t, raw = item
-            buf = _packet_buf(self._deserialize(reader, raw, c))
-            if t > slot.stop or ouster.packet_frame_id(buf, info) != slot.frame_id:
-                if t >= slot.start and bufs:
-                    pending = item
-                    break
-                if t > slot.stop:
-                    break
-                continue
-            bufs.append(buf)
+            buf = _packet_buf(self._deserialize(reader, item[2], item[0]))
+            if ouster._frame_id(buf, meta) == slot.frame_id:
+                bufs.append(buf)
         if cursor is not None:
             cursor.pending = pending
         if not bufs:
             raise FlicInputError(self.root, f"topic {self.topic}: frame {ref.frame} has no packets")
-        image, points, intensity = ouster.frame_from_packets(bufs, info, self.root)
-        return BagFrame(ref, points, None, image, None, slot.start, "os_sensor", intensity)
+        try:
+            (frame,) = ouster.decode_frames(bufs, meta, ("reflectivity",))
+        except (ouster.OusterDataError, ValueError) as exc:
+            raise FlicInputError(
+                self.root, f"topic {self.topic}: frame {ref.frame} cannot be decoded ({exc})"
+            ) from None
+        image, points = ouster.frame_image(frame, meta)
+        refl = ouster.destagger(frame.fields["reflectivity"], meta.pixel_shift)
+        intensity = refl.reshape(-1)[image.point_pixel].astype(np.float32)
+        if self.sensor is None:
+            self.sensor = meta.sensor_model()
+        return BagFrame(ref, points, None, image, None, slot.start, self._frame_id, intensity)
 
     def _frame(
         self,
@@ -601,25 +645,31 @@ class BagDataset:
         return self.beams
 
     def describe(self) -> dict[str, Any]:
-        """What ``flic info`` shows about the chosen topic."""
-        b = self.beams
-        return {
-            "topic": self.topic,
-            "type": self.msgtype,
-            "frames": len(self._slots),
-            "beams": None if b is None else b.rows,
-            "columns": None if b is None else b.width,
-            "beams_from": None if b is None else b.source,
-        }
+        """What ``flic info`` shows about the chosen topic: topic, type, frames, beams x
+        columns and where the beams came from."""
+        out: dict[str, Any] = {"topic": self.topic, "type": self.msgtype}
+        out["frames"] = f"{len(self._slots)} revolutions"
+        if self.partial_frames:
+            out["frames"] += f" ({self.partial_frames} partial ones at the ends left out)"
+        if self.sensor is not None:
+            out.update(self.sensor.describe())
+        elif self.beams is not None:
+            b = self.beams
+            out["beams x columns"] = f"{b.rows} x {b.width}"
+            out["beam angles from"] = f"{b.source}: median elevation per ring of frame 0"
+        else:
+            out["beams x columns"] = "unknown: projected by the [projection] settings"
+        return out
 
 
-def _velodyne_points(packets: list[tuple[float, np.ndarray]]) -> np.ndarray:
+def _velodyne_points(sensor: Any, packets: list[tuple[float, np.ndarray]]) -> np.ndarray:
     """One revolution of Velodyne packets ``(host time s, 1206 bytes)`` as velodyne-decoder's
-    structured points (x y z intensity time column ring return_type), the model detected from
-    the packets."""
+    structured points (x y z intensity time column ring return_type), decoded whole (a
+    VelodyneScan is one revolution already: no cut at an angle) with the sensor's config
+    (:class:`flic_cli.io.velodyne.VelodyneSensor`)."""
     import velodyne_decoder as vd
 
-    decoder = vd.ScanDecoder(vd.Config())
+    decoder = vd.ScanDecoder(sensor.config)
     _, cloud = decoder.decode([vd.VelodynePacket(t, data) for t, data in packets], True)
     return cloud
 
