@@ -249,3 +249,23 @@ def test_vlp16_bag_header_and_topics(shared_data):
     frame = ds.load(ds.refs()[0])
     assert frame.frame_id == "velodyne"
     assert frame.stamp_ns == 1673400471737763166
+
+
+def test_flic_info_lists_topics_types_counts(shared_data):
+    from typer.testing import CliRunner
+
+    from flic_cli.cli import app
+
+    result = CliRunner().invoke(app, ["info", str(shared_data / "sensors/ouster/512x10_raw.bag")])
+    assert result.exit_code == 0, result.output
+    lines = result.output.splitlines()
+    assert lines[1].split() == ["/os_node0/imu_packets", "10", "ouster_ros/msg/PacketMsg"]
+    assert lines[2].split() == [
+        "/os_node0/lidar_packets",
+        "32",
+        "ouster_ros/msg/PacketMsg",
+        "(LiDAR)",
+    ]
+    assert lines[3].split() == ["/os_node0/metadata", "1", "std_msgs/msg/String"]
+    assert "beams x columns: 128 x 512 (columns from metadata (lidar_mode 512x10))" in lines
+    assert "frames: 1 revolutions" in lines

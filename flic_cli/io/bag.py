@@ -692,3 +692,31 @@ __all__ = [
     "topics",
     "typestore",
 ]
+
+
+def info_lines(path: str | Path, topic: str | None = None) -> list[str]:
+    """``flic info`` for a bag: every topic with its type and message count (LiDAR ones
+    marked), then the chosen LiDAR topic's frames and sensor (when the bag has exactly one, or
+    ``topic`` names it).
+
+    Raises
+    ------
+    FlicInputError
+        When the bag cannot be read or ``topic`` is not one of its LiDAR topics.
+    """
+    found = topics(path)
+    width = max((len(t.topic) for t in found), default=5)
+    lines = [f"{'topic':<{width}}  {'messages':>8}  type"]
+    for t in found:
+        mark = "  (LiDAR)" if t.lidar else ""
+        lines.append(f"{t.topic:<{width}}  {t.count:>8}  {t.msgtype}{mark}")
+    lidar = [t for t in found if t.lidar]
+    if topic is None and len(lidar) != 1:
+        if lidar:
+            lines.append(f"{len(lidar)} LiDAR topics: choose one with --topic for its sensor")
+        else:
+            lines.append("no LiDAR topic flic reads (" + ", ".join(LIDAR_TYPES) + ")")
+        return lines
+    ds = BagDataset(path, [topic] if topic else None)
+    lines += [f"{k}: {v}" for k, v in ds.describe().items()]
+    return lines
