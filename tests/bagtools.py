@@ -120,10 +120,10 @@ def vlp16_clouds(shared: Path, n: int = 4) -> list[np.ndarray]:
         for c, _, raw in reader.messages():
             msg = reader.deserialize(raw, c.msgtype)
             packets = [
-                (p.stamp.sec + p.stamp.nanosec * 1e-9, np.asarray(p.data, np.uint8))
+                (p.stamp.sec + p.stamp.nanosec * 1e-9, np.asarray(p.data, np.uint8).tobytes())
                 for p in msg.packets
             ]
-            sensor = velodyne.detect_sensor([bytes(packets[0][1])])
+            sensor = velodyne.detect_sensor([packets[0][1]])
             out.append(_velodyne_points(sensor, packets))
             if len(out) == n:
                 break

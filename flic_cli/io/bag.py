@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import json
 import re
+import struct
 import warnings
 from collections.abc import Iterator
 from dataclasses import dataclass
@@ -510,11 +511,13 @@ class BagDataset:
                 cursor.pending = None
             if item is None or item[1] != slot.start:
                 raise FlicInputError(self.root, f"topic {self.topic}: message {k} is missing")
-            msg = self._deserialize(reader, item[2], item[0])
             if self.msgtype == POINTCLOUD2:
-                frame = self._cloud_frame(ref, msg)
+                frame = self._cloud_frame(ref, self._deserialize(reader, item[2], item[0]))
             else:
-                frame = self._velodyne_frame(ref, msg)
+                scan = velodyne_scan_view(item[2], bool(reader.is2))
+                if scan is None:  # not the layout of the view: rosbags' deserialiser
+                    scan = _scan_of(self._deserialize(reader, item[2], item[0]))
+                frame = self._velodyne_frame(ref, *scan)
         if cursor is not None:
             cursor.next_frame = k + 1
         return frame
@@ -546,20 +549,18 @@ class BagDataset:
             self.beams = estimate_beams(xyz, ring, width, how)
         return self._frame(ref, xyz, ring, intensity, stamp, str(header.frame_id))
 
-    def _velodyne_frame(self, ref: FrameRef, msg: Any) -> BagFrame:
+    def _velodyne_frame(
+        self, ref: FrameRef, stamp_ns: int, frame_id: str, packets: list[tuple[float, bytes]]
+    ) -> BagFrame:
         """A VelodyneScan message (one revolution of packets) decoded by
         :mod:`flic_cli.io.velodyne`: its sensor model (velodyne-decoder's calibration) and
         image (:func:`flic_cli.io.velodyne.scan_image`)."""
         from flic_cli.io import velodyne
 
-        packets = [
-            (int(p.stamp.sec) + int(p.stamp.nanosec) * 1e-9, np.asarray(p.data, dtype=np.uint8))
-            for p in msg.packets
-        ]
         if not packets:
             raise FlicInputError(self.root, f"topic {self.topic}: message {ref.frame} is empty")
         if self._velodyne is None:
-            self._velodyne = velodyne.detect_sensor([bytes(packets[0][1])])
+            self._velodyne = velodyne.detect_sensor([packets[0][1]])
         try:
             cloud = _velodyne_points(self._velodyne, packets)
         except (RuntimeError, ValueError) as exc:
@@ -569,10 +570,8 @@ class BagDataset:
         if self.sensor is None:
             self.sensor = self._velodyne.sensor_model(int(cloud["column"].max()) + 1)
         image, xyz = velodyne.scan_image(cloud, self.sensor)
-        header = msg.header
-        stamp = int(header.stamp.sec) * 1_000_000_000 + int(header.stamp.nanosec)
         intensity = np.asarray(cloud["intensity"], dtype=np.float32)
-        return BagFrame(ref, xyz, None, image, None, stamp, str(header.frame_id), intensity)
+        return BagFrame(ref, xyz, None, image, None, stamp_ns, frame_id, intensity)
 
     def _ouster_frame(
         self, reader: Any, ref: FrameRef, slot: _Slot, it: Iterator, cursor: _Cursor | None
@@ -662,7 +661,73 @@ class BagDataset:
         return out
 
 
-def _velodyne_points(sensor: Any, packets: list[tuple[float, np.ndarray]]) -> np.ndarray:
+def _scan_of(msg: Any) -> tuple[int, str, list[tuple[float, bytes]]]:
+    """A deserialised VelodyneScan as ``(stamp ns, frame id, [(packet time s, 1206 bytes)])``."""
+    stamp = int(msg.header.stamp.sec) * 1_000_000_000 + int(msg.header.stamp.nanosec)
+    packets = [
+        (int(p.stamp.sec) + int(p.stamp.nanosec) * 1e-9, np.asarray(p.data, np.uint8).tobytes())
+        for p in msg.packets
+    ]
+    return stamp, str(msg.header.frame_id), packets
+
+
+def velodyne_scan_view(raw: bytes, cdr: bool) -> tuple[int, str, list[tuple[float, bytes]]] | None:
+    """A serialised ``velodyne_msgs/VelodyneScan`` read by its fixed layout, without
+    deserialising 151 nested messages in Python (rosbags takes 44 ms per VLP-16 revolution,
+    this under 1 ms; the test checks both agree).
+
+    Layout: header (stamp, frame id), ``uint32`` packet count, then per packet a
+    ``builtin_interfaces/Time`` and ``uint8[1206]``; CDR (ROS 2, little-endian only here) aligns
+    every packet to 4 bytes (1216-byte stride), ROS 1 packs them (1214 bytes; its header starts
+    with a ``uint32`` seq).
+
+    Returns
+    -------
+    ``(stamp ns, frame id, [(packet time s, packet bytes)])``, or None when ``raw`` does not
+    have that layout (the caller falls back to rosbags).
+    """
+    size = 1206
+    try:
+        if cdr:
+            if raw[:2] != b"\x00\x01":  # CDR little-endian encapsulation
+                return None
+            base, pos, fmt = 4, 0, "<iI"
+            sec, nsec = struct.unpack_from(fmt, raw, base + pos)
+            pos += 8
+            (n,) = struct.unpack_from("<I", raw, base + pos)
+            pos += 4
+            frame_id = raw[base + pos : base + pos + max(n - 1, 0)].decode()
+            pos = (pos + n + 3) & ~3
+            (count,) = struct.unpack_from("<I", raw, base + pos)
+            pos += 4
+            stride, start = 1216, base + pos
+        else:  # a ROS 1 header has a uint32 seq first; a ROS 2 definition written as ROS 1 not
+            for head in (4, 0):
+                sec, nsec, n = struct.unpack_from("<III", raw, head)
+                if head + 16 + n > len(raw):
+                    continue
+                (count,) = struct.unpack_from("<I", raw, head + 12 + n)
+                stride, start = 8 + size, head + 16 + n
+                if start + count * stride == len(raw):
+                    frame_id = raw[head + 12 : head + 12 + n].decode()
+                    break
+            else:
+                return None
+    except (struct.error, UnicodeDecodeError):
+        return None
+    end = start + (count - 1) * stride + 8 + size if count else start
+    if not end <= len(raw) <= end + 3:  # CDR pads the message to 4 bytes
+        return None
+    buf = np.frombuffer(raw, dtype=np.uint8, count=end - start, offset=start)
+    rows = np.arange(count)[:, None] * stride
+    times = buf[rows + np.arange(8)].copy().view("<u4")  # (count, 2): sec (as int32), nanosec
+    data = buf[rows + 8 + np.arange(size)]
+    t = times[:, 0].view("<i4").astype(np.float64) + times[:, 1] * 1e-9
+    packets = [(float(t[i]), data[i].tobytes()) for i in range(count)]
+    return int(sec) * 1_000_000_000 + int(nsec), frame_id, packets
+
+
+def _velodyne_points(sensor: Any, packets: list[tuple[float, bytes]]) -> np.ndarray:
     """One revolution of Velodyne packets ``(host time s, 1206 bytes)`` as velodyne-decoder's
     structured points (x y z intensity time column ring return_type), decoded whole (a
     VelodyneScan is one revolution already: no cut at an angle) with the sensor's config

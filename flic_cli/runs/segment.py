@@ -31,6 +31,7 @@ from flic_cli.io.atomic import staged_folder
 from flic_cli.io.base import FrameRef
 from flic_cli.io.ply import write_ply
 from flic_cli.projection import Projection
+from flic_cli.runs import latency
 from flic_cli.runs.frames import FrameLoop, Skipped, sort_skipped, write_skipped
 from flic_cli.runs.output import check_output_dir
 from flic_cli.runs.pipeline import (
@@ -49,7 +50,7 @@ SEMANTICS = ("none", "oracle")
 EXPORTS = ("ply", "mcap", "bag")
 
 #: Formats whose frames are revolutions of a recording: the run reports the latency per frame.
-STREAMS = ("bag", "pcap", "ouster", "velodyne")
+STREAMS = latency.STREAMS
 
 
 @dataclass
@@ -260,20 +261,10 @@ def run_segment(
 
 
 def latency_line(latencies_ms: list[float]) -> str:
-    """``latency per revolution (decode + range image + ground + cluster): median .. ms, p99 ..
-    ms; keeps up with 10 Hz / 20 Hz: yes|no`` (keeping up: p99 within the period). The first
-    frame (JIT compilation, first imports) is reported apart."""
-    first = latencies_ms[0]
-    lat = np.asarray(latencies_ms[1:] if len(latencies_ms) > 1 else latencies_ms, np.float64)
-    med, p99 = float(np.median(lat)), float(np.percentile(lat, 99))
-    rates = ", ".join(
-        f"{hz} Hz ({1000 / hz:.0f} ms): {'yes' if p99 <= 1000 / hz else 'no'}" for hz in (10, 20)
-    )
-    return (
-        f"latency per revolution (decode + range image + ground + cluster) over {lat.size} "
-        f"frames after the first ({first:.0f} ms, JIT and cache loading included): median "
-        f"{med:.1f} ms, p99 {p99:.1f} ms, max {lat.max():.1f} ms; p99 keeps up with {rates}"
-    )
+    """The run's latency per revolution (:func:`flic_cli.runs.latency.summary_line`)."""
+    from flic_cli.runs.latency import summary_line
+
+    return summary_line("segment", np.asarray(latencies_ms))
 
 
 def _bag_writer(stack: ExitStack, stage: Path, ds: Any, storage: str, with_label: bool) -> Any:
