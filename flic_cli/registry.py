@@ -50,6 +50,16 @@ FORMATS: dict[str, Entry] = {
         "flic_cli.io.velodyne:VelodynePcapDataset",
         "a Velodyne pcap (VLP-16, VLP-32C, HDL-32E, HDL-64E, ...), or a folder of them",
     ),
+    "pcd": Entry(
+        "flic_cli.io.pcd:PcdDataset",
+        "a PCD file (ASCII, binary, binary_compressed; rows from ring/channel), or a folder",
+    ),
+    "nuscenes": Entry(
+        "flic_cli.io.nuscenes:NuScenesDataset",
+        "a nuScenes LIDAR_TOP .pcd.bin, a folder of them or a nuScenes root (Panoptic "
+        "nuScenes .npz labels beside them are scored)",
+        labelled=True,
+    ),
     "bag": Entry(
         "flic_cli.io.bag:BagDataset",
         "a ROS 1 .bag, ROS 2 bag (folder or .db3, .mcap) or MCAP file: PointCloud2, "

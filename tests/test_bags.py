@@ -209,7 +209,7 @@ def test_vlp16_bag_agrees_with_nebula_reference(shared_data):
         assert np.mean(d < 0.02) > 0.97
         assert np.percentile(d, 99) < 0.03
     # rows: 16 beams, 15 of them lit (ring 0 returns nothing in this recording)
-    assert frame.image.shape[0] == 16 and ds.sensor.name == "Velodyne VLP16"
+    assert frame.image.shape[0] == 16 and ds.sensor().name == "Velodyne VLP16"
     lit = (frame.image.ranges > 0).any(axis=1)
     assert lit.sum() == 15 and not lit[-1]  # the empty ring is the lowest beam (bottom row)
     # every decoded point is in the image; pixels hold the nearest of their points
@@ -232,7 +232,7 @@ def test_ouster_packet_bag_gives_ouster_sdks_frame(shared_data):
     frame = ds.load(ds.refs()[0])
     assert frame.image.shape == (128, 512)
     assert int(np.count_nonzero(frame.image.ranges)) == frame.points.shape[0] == 28751
-    assert ds.sensor.name == "Ouster OS-0-128"
+    assert ds.sensor().name == "Ouster OS-0-128"
     assert frame.intensity.shape == (28751,) and frame.intensity.max() > 0
     # the points lie at their pixels' ranges (beam origin offset 27.67 mm aside)
     r = np.linalg.norm(frame.points.astype(np.float64), axis=1)
@@ -267,8 +267,9 @@ def test_flic_info_lists_topics_types_counts(shared_data):
         "(LiDAR)",
     ]
     assert lines[3].split() == ["/os_node0/metadata", "1", "std_msgs/msg/String"]
-    assert "beams x columns: 128 x 512 (columns from metadata (lidar_mode 512x10))" in lines
-    assert "frames: 1 revolutions" in lines
+    assert "  beams x columns: 128 x 512 (columns from metadata (lidar_mode 512x10))" in lines
+    assert "  frames: 1 revolution(s)" in lines
+    assert "  sensor: Ouster OS-0-128" in lines
 
 
 def test_velodyne_scan_view_equals_rosbags(shared_data, tmp_path):

@@ -275,7 +275,7 @@ class BagDataset:
                 )
             self._selected = list(sel)
             self.beams: Beams | None = None
-            self.sensor: Any = None  # the SensorModel of packet topics
+            self.sensor_model: Any = None  # the SensorModel of packet topics
             self._velodyne: Any = None
             first = self._read_frame(reader, self._selected[0], conns)
             self.beams = self._beams_of(first)
@@ -287,6 +287,11 @@ class BagDataset:
     def refs(self) -> list[FrameRef]:
         """Every selected revolution of the topic, in recording order."""
         return [FrameRef(self.sequence, k, self.root, None, FORMAT) for k in self._selected]
+
+    def sensor(self, ref: FrameRef | None = None) -> Any:
+        """The sensor model of a packet topic (Ouster metadata, velodyne-decoder's calibration;
+        :class:`flic_cli.io.sensor.SensorModel`), None for PointCloud2 (see :attr:`beams`)."""
+        return self.sensor_model
 
     def folders(self) -> list[Path]:
         """The bag's folder (outputs must not go inside a rosbag2 folder)."""
@@ -567,9 +572,9 @@ class BagDataset:
             raise FlicInputError(
                 self.root, f"topic {self.topic}: Velodyne packets cannot be decoded ({exc})"
             ) from None
-        if self.sensor is None:
-            self.sensor = self._velodyne.sensor_model(int(cloud["column"].max()) + 1)
-        image, xyz = velodyne.scan_image(cloud, self.sensor)
+        if self.sensor_model is None:
+            self.sensor_model = self._velodyne.sensor_model(int(cloud["column"].max()) + 1)
+        image, xyz = velodyne.scan_image(cloud, self.sensor_model)
         intensity = np.asarray(cloud["intensity"], dtype=np.float32)
         return BagFrame(ref, xyz, None, image, None, stamp_ns, frame_id, intensity)
 
@@ -605,8 +610,8 @@ class BagDataset:
         image, points = ouster.frame_image(frame, meta)
         refl = ouster.destagger(frame.fields["reflectivity"], meta.pixel_shift)
         intensity = refl.reshape(-1)[image.point_pixel].astype(np.float32)
-        if self.sensor is None:
-            self.sensor = meta.sensor_model()
+        if self.sensor_model is None:
+            self.sensor_model = meta.sensor_model()
         return BagFrame(ref, points, None, image, None, slot.start, self._frame_id, intensity)
 
     def _frame(
@@ -650,8 +655,8 @@ class BagDataset:
         out["frames"] = f"{len(self._slots)} revolutions"
         if self.partial_frames:
             out["frames"] += f" ({self.partial_frames} partial ones at the ends left out)"
-        if self.sensor is not None:
-            out.update(self.sensor.describe())
+        if self.sensor_model is not None:
+            out.update(self.sensor_model.describe())
         elif self.beams is not None:
             b = self.beams
             out["beams x columns"] = f"{b.rows} x {b.width}"
@@ -759,15 +764,20 @@ __all__ = [
 ]
 
 
-def info_lines(path: str | Path, topic: str | None = None) -> list[str]:
-    """``flic info`` for a bag: every topic with its type and message count (LiDAR ones
-    marked), then the chosen LiDAR topic's frames and sensor (when the bag has exactly one, or
-    ``topic`` names it).
+def info_lines(path: str | Path, topic: str | None = None) -> tuple[list[str], bool]:
+    """``flic info``'s bag part: every topic with its type and message count (LiDAR ones
+    marked).
+
+    Returns
+    -------
+    lines : the table (and, without a LiDAR topic to describe, why).
+    describe : whether a LiDAR topic is chosen (``topic``, or the bag has exactly one), so that
+        its frames and sensor can be described.
 
     Raises
     ------
     FlicInputError
-        When the bag cannot be read or ``topic`` is not one of its LiDAR topics.
+        When the bag cannot be read.
     """
     found = topics(path)
     width = max((len(t.topic) for t in found), default=5)
@@ -781,7 +791,5 @@ def info_lines(path: str | Path, topic: str | None = None) -> list[str]:
             lines.append(f"{len(lidar)} LiDAR topics: choose one with --topic for its sensor")
         else:
             lines.append("no LiDAR topic flic reads (" + ", ".join(LIDAR_TYPES) + ")")
-        return lines
-    ds = BagDataset(path, [topic] if topic else None)
-    lines += [f"{k}: {v}" for k, v in ds.describe().items()]
-    return lines
+        return lines, False
+    return lines, True

@@ -77,6 +77,15 @@ def _reader(path: Path, f):  # noqa: ANN001, ANN202 (dpkt has no type hints)
     raise FlicInputError(path, "is not a pcap or pcapng capture (unknown magic number)")
 
 
+def _record_header(f):  # noqa: ANN001, ANN202
+    """dpkt's record header class for a classic pcap file (by its magic number)."""
+    import dpkt
+
+    f.seek(0)
+    magic = dpkt.pcap.FileHdr(f.read(24)).magic
+    return dpkt.pcap.MAGIC_TO_PKT_HDR[magic]
+
+
 def _udp_payload(buf: bytes, linktype: int) -> tuple[int, bytes] | None:
     """``(destination port, payload)`` of a captured frame, None unless it is IPv4/IPv6 UDP."""
     import dpkt
@@ -117,7 +126,6 @@ def _records(path: Path) -> Iterator[tuple[float, bytes, int, int]]:
     except OSError as exc:
         raise FlicInputError(path, f"cannot be read ({exc.strerror or exc})") from None
     try:
-        size = path.stat().st_size
         reader, classic = _reader(path, f)
         linktype = reader.datalink()
         pos = 24  # classic pcap: global header, then 16-byte record headers
@@ -125,12 +133,6 @@ def _records(path: Path) -> Iterator[tuple[float, bytes, int, int]]:
         try:
             for ts, buf in reader:
                 if classic:
-                    if pos + 16 + len(buf) > size:
-                        raise FlicInputError(
-                            path,
-                            f"is truncated: record {len(caplens) + 1} needs "
-                            f"{pos + 16 + len(buf) - size} more bytes than the file has",
-                        )
                     yield float(ts), buf, pos + 16, linktype
                     pos += 16 + len(buf)
                 else:
@@ -140,12 +142,17 @@ def _records(path: Path) -> Iterator[tuple[float, bytes, int, int]]:
             raise FlicInputError(
                 path, f"is truncated or damaged after record {len(caplens)} ({exc})"
             ) from None
-        if classic and pos != size:
-            raise FlicInputError(
-                path,
-                f"is truncated: {size - pos} bytes after record {len(caplens)} are a cut-off "
-                "record",
-            )
+        if classic and caplens:
+            # dpkt returns a cut-off last record as it is: compare with its header's length
+            header_cls = _record_header(f)
+            f.seek(pos - 16 - caplens[-1])
+            hdr = header_cls(f.read(16))
+            if hdr.caplen != caplens[-1]:
+                raise FlicInputError(
+                    path,
+                    f"is truncated: its last record (number {len(caplens)}) holds "
+                    f"{caplens[-1]} of its {hdr.caplen} bytes",
+                )
     finally:
         f.close()
 

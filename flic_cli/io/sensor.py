@@ -187,7 +187,11 @@ class SensorFileDataset:
         return list(self._refs)
 
     def folders(self) -> list[Path]:
-        """The folders of the selected recordings (outputs must not go inside them)."""
+        """Where the input lies (outputs must not go inside it): the folder of recordings DATA
+        names, or, for a single recording file, the file itself (so that ``--out`` may be a
+        folder beside it)."""
+        if self.root.is_file():
+            return [self.root]
         return sorted({r.path.parent for r in self._refs})
 
     def sensor(self, ref) -> SensorModel:  # noqa: ANN001

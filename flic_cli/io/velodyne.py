@@ -224,7 +224,12 @@ def scan_image(points: np.ndarray, model: SensorModel) -> tuple[RangeImage, np.n
     points : (N, 3) float32 xyz in metres, in the decoder's order (``image.point_pixel[i]`` is
         the pixel of point ``i``).
     """
-    xyz = np.stack([points["x"], points["y"], points["z"]], axis=1).astype(np.float32)
+    if points.dtype.itemsize % 4 == 0 and all(
+        points.dtype.fields[c][1] == 4 * k for k, c in enumerate("xyz")
+    ):  # x, y, z are the first three float32 of each record: one strided copy
+        xyz = np.ascontiguousarray(points.view(np.float32).reshape(len(points), -1)[:, :3])
+    else:
+        xyz = np.stack([points["x"], points["y"], points["z"]], axis=1).astype(np.float32)
     col = points["column"].astype(np.int64)
     width = int(col.max()) + 1 if col.size else 1
     if col.size:

@@ -130,6 +130,10 @@ def load_labelled_frame(ref: FrameRef) -> Frame:
     FlicInputError
         When the frame is not a SemanticKITTI scan with a ``.label`` file, or cannot be read.
     """
+    if ref.format == "nuscenes" and ref.label_path is not None:  # Panoptic nuScenes .npz
+        from flic_cli.io.nuscenes import load_labelled
+
+        return load_labelled(ref)
     if ref.format != "semantickitti" or ref.label_path is None:
         raise FlicInputError(
             ref.path,
