@@ -162,6 +162,7 @@ class Viewer:
         if ps.is_initialized():  # one polyscope per process (a second Viewer reuses it)
             pass
         elif headless:
+            ps.set_use_prefs_file(False)  # no imgui.ini / .polyscope.ini in the working folder
             ps.set_allow_headless_backends(True)
             try:
                 ps.init("openGL3_egl")
@@ -170,6 +171,7 @@ class Viewer:
                     None, f"cannot render without a window here (polyscope EGL: {exc})"
                 ) from None
         else:
+            ps.set_use_prefs_file(False)
             ps.init()
         ps.set_program_name("flic view")
         ps.set_ground_plane_mode("none")
