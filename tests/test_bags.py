@@ -88,7 +88,8 @@ def test_ring_image_matches_brute_force():
         rr = np.sqrt((p**2).sum())
         if not np.isfinite(rr) or rr == 0:
             continue
-        col = int(np.floor((np.pi - np.arctan2(p[1], p[0])) / (2 * np.pi) * width)) % width
+        az = np.float64(np.arctan2(xyz[i, 1], xyz[i, 0]))  # float32, as the reader computes it
+        col = int(np.floor((np.pi - az) * (width / (2 * np.pi)))) % width
         row = beams.row_of_ring[ring[i]]
         if expect[row, col] == 0 or np.float32(rr) < expect[row, col]:
             expect[row, col] = np.float32(rr)
