@@ -130,3 +130,22 @@ def vlp16_clouds(shared: Path, n: int = 4) -> list[np.ndarray]:
     finally:
         reader.close()
     return out
+
+
+def cycled_vlp16_bag(shared: Path, path: Path, n: int) -> Path:
+    """A rosbag2 folder (MCAP) of ``n`` real VelodyneScan messages: the nebula bag's 4
+    revolutions cycled, bag time 100 ms apart (raw messages copied, not re-serialised)."""
+    from rosbags.rosbag2 import StoragePlugin, Writer
+
+    from flic_cli.io.bag import open_reader
+
+    reader = open_reader(shared / "sensors/velodyne/nebula_vlp16/1673400471837873222")
+    try:
+        raws = [(c, raw) for c, _, raw in reader.messages()]
+    finally:
+        reader.close()
+    with Writer(path, version=9, storage_plugin=StoragePlugin.MCAP) as w:
+        conn = w.add_connection(raws[0][0].topic, raws[0][0].msgtype, typestore=store())
+        for k in range(n):
+            w.write(conn, 1_700_000_000_000_000_000 + k * 100_000_000, raws[k % len(raws)][1])
+    return path
