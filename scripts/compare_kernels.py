@@ -103,12 +103,20 @@ def base_method(base: dict[str, ModuleType], method: Any) -> Any:
 def base_image(base: dict[str, ModuleType], image: Any) -> Any:
     """The same range image as the base revision's RangeImage (its own ``point_labels``)."""
     cls = base["flic_cli/range_image.py"].RangeImage
-    return cls(**{f.name: getattr(image, f.name) for f in dataclasses.fields(image)})
+    names = {f.name for f in dataclasses.fields(cls)}
+    kw = {n: getattr(image, n) for n in names if n != "counts" and hasattr(image, n)}
+    return cls(**kw, **({"counts": image.point_counts()} if "counts" in names else {}))
+
+
+def ground_arg(key: str, ground: Any) -> Any:
+    """The ground step as an implementation takes it: the working tree's Ground, the base
+    revision's mask of the cells left out."""
+    return ground if key == "new" or ground is None else ground.left_out
 
 
 class Frames:
-    """Every frame's image, points and the mask of the cells left out (ground and held) as the
-    clusterers take them (the ground step computed once, with the working tree:
+    """Every frame's image, points and ground step as the clusterers take them (the ground
+    step computed once, with the working tree:
     :meth:`flic_cli.runs.pipeline.Segmenter.ground_step`)."""
 
     def __init__(self, args: argparse.Namespace, method: str) -> None:
@@ -123,7 +131,7 @@ class Frames:
             if ground is None:
                 self.items.append((prep.image, prep.points, None))
             else:
-                self.items.append((ground.image, prep.points, ground.left_out))
+                self.items.append((ground.image, prep.points, ground))
 
 
 def time_both(args: argparse.Namespace) -> None:
@@ -146,7 +154,7 @@ def time_both(args: argparse.Namespace) -> None:
         times: dict[str, list[float]] = {"base": [], "new": []}
         for key, impl in impls.items():  # warm-up (JIT cache loads)
             _, pts, ground = frames.items[0]
-            impl.segment(images[key][0], pts, ground)
+            impl.segment(images[key][0], pts, ground_arg(key, ground))
         differ = 0
         for rep in range(args.repeat):
             for i, (_, pts, ground) in enumerate(frames.items):
@@ -154,7 +162,7 @@ def time_both(args: argparse.Namespace) -> None:
                 out = {}
                 for key in order:
                     t = time.perf_counter()
-                    out[key] = impls[key].segment(images[key][i], pts, ground)
+                    out[key] = impls[key].segment(images[key][i], pts, ground_arg(key, ground))
                     times[key].append(1e3 * (time.perf_counter() - t))
                 if rep == 0:
                     differ += not np.array_equal(out["base"], out["new"])
@@ -192,11 +200,11 @@ def count_all(args: argparse.Namespace) -> None:
         impls = {"base": base_method(base, frames.method), "new": frames.method}
         for key, impl in impls.items():
             images = [base_image(base, im) if key == "base" else im for im, _, _ in frames.items]
-            impl.segment(images[0], frames.items[0][1], frames.items[0][2])  # warm-up
+            impl.segment(images[0], frames.items[0][1], ground_arg(key, frames.items[0][2]))
             cg.cg_start()
             cg.cg_toggle()
             for image, (_, pts, ground) in zip(images, frames.items, strict=True):
-                impl.segment(image, pts, ground)
+                impl.segment(image, pts, ground_arg(key, ground))
             cg.cg_toggle()
             cg.cg_dump(f"{name}:{key}".encode())
             cg.cg_stop()

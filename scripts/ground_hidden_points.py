@@ -75,7 +75,7 @@ def main() -> None:
         hidden = np.ones(g.points.shape[0], dtype=bool)
         hidden[owner[owner >= 0]] = False
         hidden_share.append(hidden)
-        mask = column(img, g.points)
+        mask = column.extract(img, g.points).mask
         labels = np.where(hidden, GROUND_LUT[g.labels & 0xFFFF], point_ground(img, mask))
         variants: dict[str, Ground] = {
             "pixel": extract_ground(pixel_only, img, g.points),

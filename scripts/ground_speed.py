@@ -109,7 +109,9 @@ def make_remover(cfg, spec: str, per_point: bool = False):
     if params:
         kw = {k: ast.literal_eval(v) for k, v in (p.split("=") for p in params.split(";"))}
         remover = type(remover)(**{**remover.__dict__, **kw})
-    return remover
+    if per_point:
+        return remover
+    return lambda image, points=None: remover.extract(image, points).mask
 
 
 def _same(a, b) -> bool:
@@ -213,7 +215,7 @@ def main() -> None:
         differ = {}
         for n in names:  # an old revision's masks (or decisions) against the working tree's
             if "@" in n:
-                current = cfg.remover(n.split("@")[0])
+                current = make_remover(cfg, n.split("@")[0], args.per_point)
                 if args.per_point:
                     current = functools.partial(extract_ground, current)
                 differ[n] = sum(

@@ -22,13 +22,13 @@ def test_summary_line_leaves_the_first_frame_out_and_judges_p99():
 
 def test_benchmark_on_a_bag_writes_the_latency_per_revolution(shared_data, tmp_path):
     pytest.importorskip("rosbags")
-    from flic_cli.config import load_config
     from flic_cli.runs.benchmark import run_benchmark
+    from flic_cli.runs.spec import BenchmarkRun, Selection
 
+    sel = Selection(shared_data / NEBULA, progress=False)
     result = run_benchmark(
-        shared_data / NEBULA, tmp_path, ["flic14", "bogoslavskyi"], load_config(None),
-        warmup=1, plots=False, progress=False,
-    )  # fmt: skip
+        BenchmarkRun(sel, tmp_path, ["flic14", "bogoslavskyi"], warmup=1, plots=False)
+    )
     lat = pd.read_csv(tmp_path / "latency.csv")
     assert list(lat["method"]) == ["flic14"] * 4 + ["bogoslavskyi"] * 4
     assert list(lat["frame"]) == [0, 1, 2, 3] * 2

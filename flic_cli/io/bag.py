@@ -33,7 +33,7 @@ import warnings
 from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 
@@ -241,6 +241,8 @@ class BagDataset:
 
     format = FORMAT
     detect = staticmethod(is_bag)
+    #: Predictions carry cluster ids only (no semantic class per point).
+    point_semantics: ClassVar[bool] = False
 
     def __init__(
         self,
@@ -284,9 +286,13 @@ class BagDataset:
 
     # -- the Dataset interface ------------------------------------------------------------
 
+    def labelled(self) -> bool:
+        """Bags carry no ground-truth labels."""
+        return False
+
     def refs(self) -> list[FrameRef]:
         """Every selected revolution of the topic, in recording order."""
-        return [FrameRef(self.sequence, k, self.root, None, FORMAT) for k in self._selected]
+        return [FrameRef(self.sequence, k, self.root, None, FORMAT, k) for k in self._selected]
 
     def sensor(self, ref: FrameRef | None = None) -> Any:
         """The sensor model of a packet topic (Ouster metadata, velodyne-decoder's calibration;
@@ -327,7 +333,7 @@ class BagDataset:
         """
         cursor = self._open_cursor()
         conns = [c for c in cursor.reader.connections if c.id in self._conn_ids]
-        return self._read_frame(cursor.reader, ref.frame, conns, cursor)
+        return self._read_frame(cursor.reader, ref.index, conns, cursor)
 
     # -- pickling: the open reader stays in its process -----------------------------------
 
@@ -498,7 +504,7 @@ class BagDataset:
     def _read_frame(
         self, reader: Any, k: int, conns: list[Any], cursor: _Cursor | None = None
     ) -> BagFrame:
-        ref = FrameRef(self.sequence, k, self.root, None, FORMAT)
+        ref = FrameRef(self.sequence, k, self.root, None, FORMAT, k)
         slot = self._slots[k]
         if cursor is not None and cursor.next_frame == k and cursor.messages is not None:
             it = cursor.messages
