@@ -582,7 +582,9 @@ class BagDataset:
             self.sensor_model = self._velodyne.sensor_model(int(cloud["column"].max()) + 1)
         image, xyz = velodyne.scan_image(cloud, self.sensor_model)
         intensity = np.asarray(cloud["intensity"], dtype=np.float32)
-        return BagFrame(ref, xyz, None, image, None, stamp_ns, frame_id, intensity)
+        return BagFrame(
+            ref, xyz, None, image, stamp_ns=stamp_ns, frame_id=frame_id, intensity=intensity
+        )
 
     def _ouster_frame(
         self, reader: Any, ref: FrameRef, slot: _Slot, it: Iterator, cursor: _Cursor | None
@@ -618,7 +620,10 @@ class BagDataset:
         intensity = refl.reshape(-1)[image.point_pixel].astype(np.float32)
         if self.sensor_model is None:
             self.sensor_model = meta.sensor_model()
-        return BagFrame(ref, points, None, image, None, slot.start, self._frame_id, intensity)
+        return BagFrame(
+            ref, points, None, image, stamp_ns=slot.start, frame_id=self._frame_id,
+            intensity=intensity,
+        )  # fmt: skip
 
     def _frame(
         self,
@@ -642,8 +647,9 @@ class BagDataset:
             inten = np.asarray(intensity, dtype=np.float32)
             inten = inten if all_kept else inten[kept]
         return BagFrame(
-            ref, points, None, image, None if all_kept else kept, stamp, frame_id, inten
-        )
+            ref, points, None, image, finite=None if all_kept else kept, stamp_ns=stamp,
+            frame_id=frame_id, intensity=inten,
+        )  # fmt: skip
 
     def _beams_of(self, first: BagFrame) -> Beams | None:
         if self.beams is None and first.image is None and self.msgtype == POINTCLOUD2:

@@ -29,8 +29,8 @@ from flic_cli.errors import FlicInputError
 from flic_cli.io.base import Frame, FrameRef
 from flic_cli.io.pcd import cloud_geometry, kept_points
 from flic_cli.io.rings import ring_image
-from flic_cli.io.semantickitti import encode_labels
 from flic_cli.io.sensor import FileInfo, SensorFileDataset, SensorModel
+from flic_cli.labels import encode as encode_labels
 
 FORMAT = "nuscenes"
 SUFFIX = ".pcd.bin"
