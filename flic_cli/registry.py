@@ -86,6 +86,14 @@ FORMATS: dict[str, Entry] = {
         "nuScenes .npz labels beside them are scored)",
         labelled=True,
     ),
+    "bag": Entry(
+        "flic_cli.io.bag:BagDataset",
+        "a ROS 1 .bag, ROS 2 bag (folder or .db3, .mcap) or MCAP file: PointCloud2, "
+        "VelodyneScan or Ouster packets",
+        frames_per_file="many",
+        requires="rosbags",
+        install="pip install rosbags",
+    ),
 }
 
 #: Method kinds (the ``kind`` of a ``[methods.NAME]`` config table).

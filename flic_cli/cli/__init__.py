@@ -10,7 +10,13 @@ import sys
 
 import typer
 
-from flic_cli.cli import benchmark, evaluate, info, segment  # noqa: F401  (registers the commands)
+from flic_cli.cli import (  # noqa: F401  (registers the commands)
+    benchmark,
+    evaluate,
+    info,
+    segment,
+    view,
+)
 from flic_cli.cli.app import app
 
 __all__ = ["app", "main"]

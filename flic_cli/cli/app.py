@@ -128,6 +128,15 @@ SkipBadOpt = Annotated[
     ),
 ]
 
+TopicOpt = Annotated[
+    str | None,
+    typer.Option(
+        "--topic",
+        help="Bags and MCAP files: the LiDAR topic to read (PointCloud2, VelodyneScan or Ouster "
+        "packets). Default: the bag's only LiDAR topic.",
+    ),
+]
+
 
 def ground_remover_option(default_help: str) -> Any:
     """The ``--ground-remover`` option, listing the registered removers."""
