@@ -16,7 +16,7 @@ from numba import njit
 from pydantic import Field, model_validator
 from pydantic.dataclasses import dataclass
 
-from flic_cli.config.component import STRICT
+from flic_cli.component import STRICT
 from flic_cli.range_image import RangeImage
 
 

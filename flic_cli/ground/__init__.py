@@ -1,6 +1,6 @@
 """Ground extraction: the step between the range image and the clusterer.
 
-Every remover is a component (:mod:`flic_cli.config.component`) with one method,
+Every remover is a component (:mod:`flic_cli.component`) with one method,
 ``remover.extract(image, points) -> Ground`` (:class:`flic_cli.ground.base.Ground`: the ground
 pixels, the decision per point where it makes one, the held cells and the image the clusterers
 see), see :class:`flic_cli.ground.base.GroundRemover`:

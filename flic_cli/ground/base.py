@@ -15,7 +15,7 @@ from flic_cli.range_image import RangeImage
 
 
 class GroundRemover(Protocol):
-    """A ground remover: a component (see :mod:`flic_cli.config.component`) whose one method
+    """A ground remover: a component (see :mod:`flic_cli.component`) whose one method
     ``extract(image, points) -> Ground`` decides the ground of a scan (:class:`Ground`).
 
     ``points`` are the (N, 3) points of the evaluated point set, point i in pixel

@@ -45,7 +45,7 @@ from pydantic import Field
 from pydantic.dataclasses import dataclass
 from scipy.signal import savgol_coeffs
 
-from flic_cli.config.component import STRICT
+from flic_cli.component import STRICT
 from flic_cli.ground.base import Ground, per_sensor
 from flic_cli.range_image import RangeImage
 

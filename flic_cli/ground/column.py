@@ -104,7 +104,7 @@ from pydantic import Field
 from pydantic.dataclasses import dataclass
 
 from flic_cli.bitwords import pack, trailing_zeros
-from flic_cli.config.component import STRICT
+from flic_cli.component import STRICT
 from flic_cli.ground.base import Ground, per_sensor, points_left
 from flic_cli.range_image import RangeImage
 

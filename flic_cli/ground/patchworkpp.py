@@ -18,7 +18,7 @@ import numpy as np
 from pydantic import Field
 from pydantic.dataclasses import dataclass
 
-from flic_cli.config.component import STRICT
+from flic_cli.component import STRICT
 from flic_cli.errors import FlicInputError
 from flic_cli.ground.base import Ground, pixel_mask
 from flic_cli.range_image import RangeImage

@@ -21,11 +21,20 @@ class Method(Protocol):
     removed): image methods leave out the pixels of ``ground.left_out``, 3D methods the points
     whose pixel is left out or -1; the points of held cells take the cluster of the cell
     standing on them (``ground.attached``). ``points`` are the scan's (N, 3) points, pixel
-    ``image.point_pixel[i]`` for point i. ``main_param`` names the parameter that
-    ``flic sweep-threshold`` varies.
+    ``image.point_pixel[i]`` for point i.
+
+    What the runs need to know is declared on the class: ``main_param`` names the parameter that
+    ``flic sweep-threshold`` varies, ``sweep_range = (from, to, step)`` its default range and
+    ``sweep_label`` its axis label (with unit); ``slow = True`` makes ``flic benchmark`` time the
+    method on every n-th frame only (``--slow-every``, as DBSCAN). A method that needs an
+    optional package names it in its :data:`flic_cli.registry.METHODS` entry (``requires``,
+    ``install``) or defines ``check_installed(self)`` when it depends on a parameter.
     """
 
     main_param: ClassVar[str]
+    sweep_range: ClassVar[tuple[float, float, float]]
+    sweep_label: ClassVar[str]
+    slow: ClassVar[bool]
 
     def segment(
         self, image: RangeImage, points: np.ndarray, ground: Ground | None

@@ -8,7 +8,7 @@ import numpy as np
 from pydantic import Field
 from pydantic.dataclasses import dataclass
 
-from flic_cli.config.component import STRICT
+from flic_cli.component import STRICT
 from flic_cli.methods.base import ground_parts, point_weights
 from flic_cli.methods.connections import ANGLE, run_kernel
 from flic_cli.methods.flic import cached_sets
@@ -41,6 +41,9 @@ class Bogoslavskyi:
     angle_deg: Annotated[float, Field(gt=0, lt=90, description="angle threshold, degrees")] = 10.0
     min_size: Annotated[int, Field(ge=1, description="smallest cluster kept, points")] = 100
     main_param: ClassVar[str] = "angle_deg"
+    sweep_range: ClassVar[tuple[float, float, float]] = (2.0, 30.0, 1.0)
+    sweep_label: ClassVar[str] = "angle threshold beta [deg]"
+    slow: ClassVar[bool] = False
 
     def segment(self, image: RangeImage, points: np.ndarray, ground: Ground | None) -> np.ndarray:
         left_out, attached = ground_parts(ground)

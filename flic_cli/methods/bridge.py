@@ -55,7 +55,7 @@ from pydantic import Field
 from pydantic.dataclasses import dataclass
 
 from flic_cli.bitwords import pack, trailing_zeros
-from flic_cli.config.component import STRICT
+from flic_cli.component import STRICT
 from flic_cli.methods.base import ground_parts, point_weights
 from flic_cli.methods.criteria import distance_edge
 from flic_cli.methods.engine import (
@@ -477,6 +477,9 @@ class Bridge:
     reach_px: Annotated[int, Field(ge=1, le=256, description="longest walk, pixels")] = 12
     min_size: Annotated[int, Field(ge=1, description="smallest cluster kept, points")] = 100
     main_param: ClassVar[str] = "threshold_m"
+    sweep_range: ClassVar[tuple[float, float, float]] = (0.2, 1.0, 0.05)
+    sweep_label: ClassVar[str] = "distance threshold [m]"
+    slow: ClassVar[bool] = False
 
     def segment(self, image: RangeImage, points: np.ndarray, ground: Ground | None) -> np.ndarray:
         left_out, attached = ground_parts(ground)

@@ -29,7 +29,7 @@ import numpy as np
 from pydantic import Field
 from pydantic.dataclasses import dataclass
 
-from flic_cli.config.component import STRICT
+from flic_cli.component import STRICT
 from flic_cli.errors import FlicInputError
 from flic_cli.methods.base import drop_small, ground_parts
 from flic_cli.range_image import RangeImage
@@ -85,6 +85,9 @@ class Dbscan:
     min_size: Annotated[int, Field(ge=1, description="smallest cluster kept, points")] = 100
     backend: Literal["sklearn", "fastdbscan"] = "sklearn"
     main_param: ClassVar[str] = "eps_m"
+    sweep_range: ClassVar[tuple[float, float, float]] = (0.2, 1.5, 0.1)
+    sweep_label: ClassVar[str] = "DBSCAN eps [m]"
+    slow: ClassVar[bool] = True
 
     def check_installed(self) -> None:
         """Fail with the install hint when the chosen backend's package is missing."""

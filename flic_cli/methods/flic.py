@@ -9,7 +9,7 @@ import numpy as np
 from pydantic import Field, NonNegativeInt, field_validator
 from pydantic.dataclasses import dataclass
 
-from flic_cli.config.component import STRICT
+from flic_cli.component import STRICT
 from flic_cli.methods.base import ground_parts, point_weights
 from flic_cli.methods.connections import DISTANCE, run_kernel
 from flic_cli.range_image import RangeImage
@@ -114,6 +114,9 @@ class Flic:
     mc_mode: Literal["map", "neighbour"] = "map"
     backend: Literal["numba", "scipy"] = "numba"
     main_param: ClassVar[str] = "threshold_m"
+    sweep_range: ClassVar[tuple[float, float, float]] = (0.2, 1.5, 0.05)
+    sweep_label: ClassVar[str] = "distance threshold [m]"
+    slow: ClassVar[bool] = False
 
     @field_validator("maps")
     @classmethod

@@ -15,9 +15,10 @@ from typing import Any
 
 import numpy as np
 
+from flic_cli import registry
 from flic_cli.classes import ground_mask
+from flic_cli.component import check_installed
 from flic_cli.config import Config
-from flic_cli.config.component import check_installed
 from flic_cli.errors import FlicInputError
 from flic_cli.ground.base import Ground
 from flic_cli.io.base import Frame, FrameRef
@@ -120,21 +121,20 @@ def scan_semantics(frame: Frame, semantics: str) -> np.ndarray:
 
     Parameters
     ----------
-    frame : a SemanticKITTI frame (with labels for ``"oracle"``).
+    frame : a frame of a dataset with ``point_semantics`` (with labels for ``"oracle"``).
     semantics : ``"oracle"`` (the ground truth's classes) or a folder of a semantic network's
         predictions (see :mod:`flic_cli.semantics`).
     """
-    from flic_cli.io import read_label
-    from flic_cli.semantics import oracle_semantics, read_semantics
+    from flic_cli.io.semantickitti import read_semantics
+    from flic_cli.semantics import oracle_semantics
 
     ref = frame.ref
     if semantics != "oracle":
         return read_semantics(semantics, ref.sequence, ref.frame, frame.n_read)
-    if frame.labels is None or ref.label_path is None:
+    labels = frame.labels_as_stored()  # the dropped points' too
+    if labels is None:
         raise FlicInputError(ref.path, "--semantics oracle needs the frame's labels")
-    if frame.finite is None:
-        return oracle_semantics(frame.labels)
-    return oracle_semantics(read_label(ref.label_path, frame.n_read))  # dropped points too
+    return oracle_semantics(labels)
 
 
 def prepare_semantic(frame: Frame, semantics: np.ndarray, projection: Projection) -> Prepared:
@@ -216,7 +216,7 @@ class Segmenter:
 
     def with_param(self, value: float) -> Segmenter:
         """The same segmenter with the method's main parameter (sweeps) set to ``value``."""
-        from flic_cli.config.component import describe
+        from flic_cli.component import describe
 
         param = self.method.main_param
         try:
@@ -246,10 +246,14 @@ def build_segmenter(
     """
     spec = config.method(name)
     check_setting(setting)
+    if spec.kind in registry.METHODS:
+        registry.check_installed(f"method {name!r}", registry.METHODS[spec.kind])
     check_installed(spec.method)
     if setting == "no-ground":
         return Segmenter(name, spec.kind, spec.method, None, None)
     remover = spec.ground if ground_remover == OWN else ground_remover
+    if remover in registry.REMOVERS:
+        registry.check_installed(f"ground remover {remover!r}", registry.REMOVERS[remover])
     check_installed(config.remover(remover))
     return Segmenter(name, spec.kind, spec.method, remover, config.remover(remover))
 
