@@ -13,8 +13,8 @@
 #               also remakes results/ground/bogoslavskyi_fidelity*.csv (their ground masks)
 #     panoptic  semantic-kitti-api's own scores: SKAPI=<a PRBonn/semantic-kitti-api checkout>,
 #               in a Python with numpy and pyyaml
-# On a 2-core machine the default steps take a few hours (ground-sweep and bridge-grid most of
-# it). JOBS sets the processes of evaluate and sweep-threshold.
+# ground-sweep and bridge-grid are the longest steps (many evaluations of the 50 frames each).
+# JOBS sets the processes of evaluate and sweep-threshold.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 DATA=../shared/data/semantickitti
