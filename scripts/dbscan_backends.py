@@ -63,7 +63,7 @@ def main() -> None:
     ds = open_dataset(args.data)
     rows, ious = [], {"sklearn": [], "fastdbscan": []}
     for ref in tqdm(ds.refs(), unit="frame"):
-        prep = prepare(load_labelled_frame(ref), "no-ground", cfg.projection)
+        prep = prepare(load_labelled_frame(ds, ref), "no-ground", cfg.projection)
         pts = prep.points[prep.image.point_pixel >= 0]
         row = {"sequence": ref.sequence, "frame": ref.frame, "points": pts.shape[0]}
         raw, core, final = {}, {}, {}

@@ -7,17 +7,16 @@ p5 and p95 milliseconds per frame and each remover's median relative to the firs
 that need points get the frame's points. Timings on a shared machine are noisy: compare the
 relative figures of one run, not absolute figures across runs.
 
-A remover is a registered name, optionally with parameters separated by ``;``
-(``column:hidden_points=False``, ``column:neighbour_px=0;under_m=1.0``).
-
-``--per-point`` times what the ground table (``scripts/ground_table.py``) times instead of the
-mask call: :func:`flic_cli.ground.base.extract_ground`, the remover with its per-point decision
-(step 7 of ``column``) and the image the clusterers see.
+Each call is what the ground table (``scripts/ground_table.py``) and the runs time:
+``remover.extract(image, points)``, the remover's whole decision (its mask, its per-point decision
+such as step 7 of ``column``, and the image the clusterers see). A remover is a registered name,
+optionally with parameters separated by ``;`` (``column:hidden_points=False``,
+``column:neighbour_px=0;under_m=1.0``).
 
 Usage::
 
     python scripts/ground_speed.py ../shared/data/semantickitti \\
-        --removers column,paper,bogoslavskyi,patchworkpp --per-point --rounds 3 \\
+        --removers column,paper,bogoslavskyi,patchworkpp --rounds 3 \\
         --out results/ground/speed_per_point_semantickitti.csv
 """
 
@@ -25,7 +24,6 @@ from __future__ import annotations
 
 import argparse
 import ast
-import functools
 import gc
 import time
 from pathlib import Path
@@ -34,7 +32,6 @@ import numpy as np
 import pandas as pd
 
 from flic_cli.config import load_config
-from flic_cli.ground.base import extract_ground
 from flic_cli.io import open_dataset
 from flic_cli.io.atomic import write_table
 from flic_cli.runs.pipeline import prepare
@@ -57,9 +54,6 @@ def main() -> None:
     parser.add_argument("--removers", default="paper,column,bogoslavskyi")
     parser.add_argument("--rounds", type=int, default=5)
     parser.add_argument("--frames", type=int, default=None, help="first N frames only")
-    parser.add_argument(
-        "--per-point", action="store_true", help="time extract_ground (with per-point decisions)"
-    )
     parser.add_argument("--out", type=Path, default=None)
     args = parser.parse_args()
 
@@ -68,10 +62,7 @@ def main() -> None:
     ds = open_dataset(args.data)
     frames = [prepare(ds.load(ref), "ground", cfg.projection) for ref in ds.refs()[: args.frames]]
     removers = {n: make_remover(cfg, n) for n in names}
-    if args.per_point:
-        calls = {n: functools.partial(extract_ground, r) for n, r in removers.items()}
-    else:
-        calls = removers
+    calls = {n: r.extract for n, r in removers.items()}
     for call in calls.values():  # warm-up: JIT compilation or cache load
         call(frames[0].image, frames[0].points)
     times: dict[str, list[float]] = {n: [] for n in names}

@@ -51,13 +51,13 @@ for step in $STEPS; do
     flic benchmark "$LOG/moosmann" --methods "$METHODS,$PEERS" --ground-remover paper \
       --rounds 5 --no-plots --out results/benchmark/synthetic-moosmann-paper-ground
     fresh results/benchmark/kitti-as-moosmann
-    flic benchmark "$KLOG" --methods "$METHODS,$PEERS" --rounds 5 --dbscan-every 2 \
+    flic benchmark "$KLOG" --methods "$METHODS,$PEERS" --rounds 5 --slow-every 2 \
       --out results/benchmark/kitti-as-moosmann
     fresh results/benchmark/kitti-as-moosmann-paper-ground
     flic benchmark "$KLOG" --methods "$METHODS,$PEERS" --ground-remover paper --rounds 5 \
-      --dbscan-every 2 --no-plots --out results/benchmark/kitti-as-moosmann-paper-ground
+      --slow-every 2 --no-plots --out results/benchmark/kitti-as-moosmann-paper-ground
     fresh results/benchmark/semantickitti
-    flic benchmark "$DATA" --methods "$METHODS,$PEERS" --rounds 5 --dbscan-every 2 \
+    flic benchmark "$DATA" --methods "$METHODS,$PEERS" --rounds 5 --slow-every 2 \
       --out results/benchmark/semantickitti
     python scripts/log_stats.py "$LOG/moosmann" > results/benchmark/synthetic-moosmann/log_stats.txt
     python scripts/log_stats.py "$KLOG" > results/benchmark/kitti-as-moosmann/log_stats.txt
@@ -142,11 +142,11 @@ for step in $STEPS; do
     # the removers alone, interleaved
     kitti_log
     python scripts/ground_speed.py "$DATA" --removers column,paper,bogoslavskyi,patchworkpp \
-      --per-point --rounds 3 --out results/ground/speed_per_point_semantickitti.csv
+      --rounds 3 --out results/ground/speed_per_point_semantickitti.csv
     python scripts/ground_speed.py "$KLOG" --removers column,paper,bogoslavskyi,patchworkpp \
-      --per-point --rounds 5 --out results/ground/speed_per_point_kitti-as-moosmann.csv
+      --rounds 5 --out results/ground/speed_per_point_kitti-as-moosmann.csv
     python scripts/ground_speed.py "$DATA" \
-      --removers column,column:hidden_points=False,paper,patchworkpp --per-point --rounds 3 \
+      --removers column,column:hidden_points=False,paper,patchworkpp --rounds 3 \
       --out results/ground/speed_per_point_without_step7_semantickitti.csv
     ;;
   sweeps)

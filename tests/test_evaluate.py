@@ -521,7 +521,7 @@ def test_ground_csv_pools_each_removers_counts(sample_root: Path, tmp_path: Path
         total = GroundCounts()
         for ref in ds.refs():
             prep = prepare(ds.load(ref), "ground", cfg.projection)
-            mask = cfg.remover(name)(prep.image, prep.points)
+            mask = cfg.remover(name).extract(prep.image, prep.points).mask
             total = total + ground_counts(prep.labels, point_ground(prep.image, mask))
         expected = ground_scores(total)
         for key in ("precision", "recall", "f1", "things_removed"):

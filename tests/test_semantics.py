@@ -14,16 +14,9 @@ from hypothesis import strategies as st
 from flic_cli.classes import THING_CLASSES
 from flic_cli.errors import FlicInputError
 from flic_cli.io import read_predictions, write_label, write_predictions
+from flic_cli.io.semantickitti import read_semantics, semantics_path, write_semantic_predictions
 from flic_cli.metrics.panoptic import class_scores, panoptic_counts
-from flic_cli.semantics import (
-    MODES,
-    cluster_mask,
-    combine,
-    oracle_semantics,
-    read_semantics,
-    semantics_path,
-    write_semantic_predictions,
-)
+from flic_cli.semantics import MODES, cluster_mask, combine, oracle_semantics
 
 CAR, PERSON, ROAD, BUILDING, MOVING_CAR = 10, 30, 40, 50, 252
 L_CAR = 1

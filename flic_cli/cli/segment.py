@@ -87,23 +87,15 @@ def segment(
     from flic_cli.config import load_config
     from flic_cli.runs.pipeline import resolve_method
     from flic_cli.runs.segment import run_segment
+    from flic_cli.runs.spec import SegmentRun, Selection
 
-    cfg = load_config(config)
     seqs, frm = _selection(sequences, frames)
+    sel = Selection(
+        _data_or_sample(data), seqs, frm, setting, ground_remover, load_config(config), jobs,
+        skip_bad,
+    )  # fmt: skip
     summary = run_segment(
-        _data_or_sample(data),
-        out,
-        resolve_method(method, mc),
-        cfg,
-        setting,
-        seqs,
-        frm,
-        ground_remover,
-        render,
-        jobs=jobs,
-        skip_bad=skip_bad,
-        semantics=semantics,
-        export=tuple(export or ()),
+        SegmentRun(sel, out, resolve_method(method, mc), render, semantics, tuple(export or ()))
     )
     typer.echo(summary.line())
 

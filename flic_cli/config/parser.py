@@ -15,7 +15,7 @@ from importlib import resources
 from pathlib import Path
 from typing import Any
 
-from flic_cli.config.component import describe
+from flic_cli.component import describe
 from flic_cli.config.schema import Config, MethodSpec
 from flic_cli.errors import FlicInputError
 

@@ -17,13 +17,14 @@ from PIL import Image, UnidentifiedImageError
 
 from flic_cli.errors import FlicInputError
 from flic_cli.io.atomic import atomic_write, atomic_write_bytes, read_bytes, read_text
-from flic_cli.io.base import Frame, FrameRef, select_sequences
-from flic_cli.io.semantickitti import frames_text, in_frames
+from flic_cli.io.base import Frame, FrameRef, frames_text, in_frames, select_sequences
 from flic_cli.range_image import RangeImage, from_sensor_image_with_points
 
 FORMAT = "moosmann"
 RANGE_SCALE = 500.0
 """PNG pixel value per metre (1 unit = 2 mm)."""
+_PNG_MAX = int(np.iinfo(np.uint16).max)
+"""Largest value of a 16-bit PNG pixel."""
 
 _SCAN_NAME = re.compile(r"scan(\d+)\.png")
 _PNG_COLOUR_TYPES = {
@@ -189,7 +190,7 @@ def write_png_range(path: str | Path, ranges_m: np.ndarray) -> None:
     """
     r = np.asarray(ranges_m, dtype=np.float64)
     r = np.where(np.isfinite(r) & (r > 0), r, 0.0)
-    pixels = np.clip(np.rint(r * RANGE_SCALE), 0, 65535).astype("<u2")
+    pixels = np.clip(np.rint(r * RANGE_SCALE), 0, _PNG_MAX).astype("<u2")
     with atomic_write(path) as tmp:
         Image.fromarray(pixels).save(tmp, format="PNG")
 
@@ -263,7 +264,7 @@ def write_label_image(path: str | Path, labels: np.ndarray) -> Path:
     lab = np.asarray(labels)
     if lab.ndim != 2 or not np.issubdtype(lab.dtype, np.integer):
         raise ValueError(f"labels must be a 2-D integer array, got {lab.dtype} {lab.shape}")
-    if lab.size and (lab.min() < 0 or lab.max() > 0xFFFF):
+    if lab.size and (lab.min() < 0 or lab.max() > _PNG_MAX):
         raise ValueError(
             f"cluster ids must lie in 0..65535 to fit a 16-bit PNG, got {lab.min()}..{lab.max()}"
         )
@@ -366,6 +367,7 @@ class MoosmannDataset:
     """
 
     format = FORMAT
+    point_semantics = False
     detect = staticmethod(is_moosmann)
 
     def __init__(
@@ -412,6 +414,11 @@ class MoosmannDataset:
     def refs(self) -> list[FrameRef]:
         """Every selected frame, ordered by log then frame number."""
         return list(self._refs)
+
+    @staticmethod
+    def labelled() -> bool:
+        """False: a Moosmann log has no ground-truth labels."""
+        return False
 
     def folders(self) -> list[Path]:
         """The folders of the selected logs (outputs must not go inside them)."""

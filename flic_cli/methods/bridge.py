@@ -47,7 +47,7 @@ diagonal links of measurements on a surface's border.
 
 from __future__ import annotations
 
-from typing import Annotated, ClassVar
+from typing import TYPE_CHECKING, Annotated, ClassVar
 
 import numpy as np
 from numba import njit
@@ -55,7 +55,7 @@ from pydantic import Field
 from pydantic.dataclasses import dataclass
 
 from flic_cli.bitwords import pack, trailing_zeros
-from flic_cli.config.component import STRICT
+from flic_cli.component import STRICT
 from flic_cli.methods._unionfind import (
     _attach,
     _label_row,
@@ -67,8 +67,11 @@ from flic_cli.methods._unionfind import (
     pixel_output,
     point_output,
 )
-from flic_cli.methods.base import point_weights
+from flic_cli.methods.base import ground_parts, point_weights
 from flic_cli.range_image import RangeImage
+
+if TYPE_CHECKING:
+    from flic_cli.ground.base import Ground
 
 #: Walk directions (row step, column step): left, up, up-left, up-right (the order of the tables
 #: of :func:`walk_tables`). Every walk goes towards earlier pixels in raster order, except left
@@ -473,10 +476,12 @@ class Bridge:
     reach_px: Annotated[int, Field(ge=1, le=256, description="longest walk, pixels")] = 12
     min_size: Annotated[int, Field(ge=1, description="smallest cluster kept, points")] = 100
     main_param: ClassVar[str] = "threshold_m"
+    sweep_range: ClassVar[tuple[float, float, float]] = (0.2, 1.0, 0.05)
+    sweep_label: ClassVar[str] = "distance threshold [m]"
+    slow: ClassVar[bool] = False
 
-    def segment(
-        self, image: RangeImage, points: np.ndarray, ground: np.ndarray | None
-    ) -> np.ndarray:
+    def segment(self, image: RangeImage, points: np.ndarray, ground: Ground | None) -> np.ndarray:
+        left_out, attached = ground_parts(ground)
         return run_bridge(
             image.ranges,
             image.elevation,
@@ -484,10 +489,10 @@ class Bridge:
             self.gamma_deg,
             self.reach_px,
             self.min_size,
-            ground,
+            left_out,
             point_weights(image),
             image.point_pixel,
-            image.attached,
+            attached,
         )
 
 

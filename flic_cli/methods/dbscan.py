@@ -23,16 +23,19 @@ turns 78 border points into noise.
 from __future__ import annotations
 
 import importlib.util
-from typing import Annotated, ClassVar, Literal
+from typing import TYPE_CHECKING, Annotated, ClassVar, Literal
 
 import numpy as np
 from pydantic import Field
 from pydantic.dataclasses import dataclass
 
-from flic_cli.config.component import STRICT
+from flic_cli.component import STRICT
 from flic_cli.errors import FlicInputError
-from flic_cli.methods.base import drop_small
+from flic_cli.methods.base import drop_small, ground_parts
 from flic_cli.range_image import RangeImage
+
+if TYPE_CHECKING:
+    from flic_cli.ground.base import Ground
 
 BACKENDS = ("sklearn", "fastdbscan")
 
@@ -82,6 +85,9 @@ class Dbscan:
     min_size: Annotated[int, Field(ge=1, description="smallest cluster kept, points")] = 100
     backend: Literal["sklearn", "fastdbscan"] = "sklearn"
     main_param: ClassVar[str] = "eps_m"
+    sweep_range: ClassVar[tuple[float, float, float]] = (0.2, 1.5, 0.1)
+    sweep_label: ClassVar[str] = "DBSCAN eps [m]"
+    slow: ClassVar[bool] = True
 
     def check_installed(self) -> None:
         """Fail with the install hint when the chosen backend's package is missing."""
@@ -91,25 +97,24 @@ class Dbscan:
                 "backend 'fastdbscan' needs the package dbscan: pip install 'flic[fastdbscan]'",
             )
 
-    def segment(
-        self, image: RangeImage, points: np.ndarray, ground: np.ndarray | None
-    ) -> np.ndarray:
+    def segment(self, image: RangeImage, points: np.ndarray, ground: Ground | None) -> np.ndarray:
+        left_out, attached = ground_parts(ground)
         pix = image.point_pixel
         keep = pix >= 0
-        if ground is not None:
-            keep &= ~ground.reshape(-1)[np.maximum(pix, 0)]
+        if left_out is not None:
+            keep &= ~left_out.reshape(-1)[np.maximum(pix, 0)]
         out = np.zeros(points.shape[0], dtype=np.int32)
-        if image.attached is None or not len(image.attached):
+        if attached is None or not len(attached):
             out[keep] = dbscan_labels(
                 points[keep], self.eps_m, self.min_samples, self.min_size, self.backend
             )
             return out
-        # held pixels (left out by ``ground``): their points take the cluster of a point of the
+        # held pixels (in ``left_out``): their points take the cluster of a point of the
         # pixel standing on them and count towards its size
         out[keep] = dbscan_labels(points[keep], self.eps_m, self.min_samples, 1, self.backend)
         cell = np.zeros(image.ranges.size, dtype=np.int32)
         cell[pix[keep]] = out[keep]
-        held, target = image.attached[:, 0], image.attached[:, 1]
+        held, target = attached[:, 0], attached[:, 1]
         cell[held] = np.where(target >= 0, cell[np.maximum(target, 0)], 0)
         is_held = np.zeros(image.ranges.size, dtype=bool)
         is_held[held] = True

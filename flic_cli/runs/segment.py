@@ -21,7 +21,6 @@ from typing import Any
 
 import numpy as np
 
-from flic_cli.config import Config
 from flic_cli.errors import FlicInputError
 from flic_cli.ground.base import Ground
 from flic_cli.io import open_dataset
@@ -32,6 +31,7 @@ from flic_cli.projection import Projection
 from flic_cli.runs.frames import FrameLoop, Skipped, sort_skipped, write_skipped
 from flic_cli.runs.output import check_output_dir
 from flic_cli.runs.pipeline import (
+    OWN,
     Prepared,
     Segmenter,
     build_segmenter,
@@ -39,6 +39,7 @@ from flic_cli.runs.pipeline import (
     prepare_semantic,
     scan_semantics,
 )
+from flic_cli.runs.spec import SegmentRun
 
 #: ``--semantics`` values besides a folder of a semantic network's predictions.
 SEMANTICS = ("none", "oracle")
@@ -128,68 +129,47 @@ class SegmentSummary:
         return f"{text} -> {self.out}"
 
 
-def run_segment(
-    data: Path,
-    out: Path,
-    method: str,
-    config: Config,
-    setting: str = "ground",
-    sequences: list[str] | None = None,
-    frames: tuple[int | None, int | None] | None = None,
-    ground_remover: str = "own",
-    render: int | None = None,
-    jobs: int = 1,
-    skip_bad: bool = False,
-    progress: bool = True,
-    semantics: str = "none",
-    export: tuple[str, ...] = (),
-) -> SegmentSummary:
-    """Segment every selected frame and write ``<out>/sequences/NN/predictions/XXXXXX.label``.
+def run_segment(spec: SegmentRun) -> SegmentSummary:
+    """Segment every selected frame and write its prediction in the data format's own encoding
+    (SemanticKITTI ``<out>/sequences/NN/predictions/XXXXXX.label``).
 
     Parameters
     ----------
-    data : dataset root, sequence folder or Moosmann log.
-    out : output root.
-    method : method variant name (``flic14``, ``bogoslavskyi``, ...).
-    config : loaded config.
-    setting : ``"ground"`` or ``"no-ground"``.
-    ground_remover : ``"own"`` or a remover's name (see
-        :func:`flic_cli.runs.pipeline.build_segmenter`).
-    render : if set, also draw this frame number (which must be among the selected frames):
-        ``<out>/render_<seq>_<frame>.png`` (the range image) and ``<out>/views_<seq>_<frame>.png``
-        (bird's-eye and oblique 3D views; with labels, ground truth beside the prediction with
-        missed, split and merged objects marked).
-    jobs : processes (see :func:`flic_cli.runs.parallel.imap_frames`).
-    skip_bad : go on past frames whose input is bad (listed in ``skipped.csv``).
-    progress : show a progress bar.
-    semantics : ``"none"``, ``"oracle"`` (ground-truth classes) or a folder of a semantic
-        network's predictions (``DIR/sequences/NN/predictions/XXXXXX.label``).
-    export : per-frame exports besides the predictions: ``"ply"`` (a PLY point cloud with
-        cluster ids and colours, :func:`flic_cli.io.ply.write_ply`).
+    spec : what to segment and how (:class:`flic_cli.runs.spec.SegmentRun`; the selection's
+        setting defaults to ``"ground"``, its ground remover to ``"own"``).
 
     Raises
     ------
     FlicInputError
         On bad input, before any work where it can be known (data, options, ``out``).
     """
-    wanted = _semantics_mode(semantics)
+    sel = spec.selection
+    config = sel.loaded_config()
+    setting = sel.setting_or("ground")
+    method, render, export = spec.method, spec.render, spec.export
+    wanted = _semantics_mode(spec.semantics)
     bad_export = [e for e in export if e not in EXPORTS]
     if bad_export:
         raise FlicInputError(None, f"--export {bad_export[0]}: one of {', '.join(EXPORTS)}")
     ds = open_dataset(
-        data, sequences, frames, require_labels=setting == "no-ground" or wanted == "oracle"
+        sel.data,
+        sel.sequences,
+        sel.frames,
+        require_labels=setting == "no-ground" or wanted == "oracle",
     )
-    if wanted is not None and ds.format != "semantickitti":
-        raise FlicInputError(data, "--semantics needs SemanticKITTI data (a scan's points)")
+    if wanted is not None and not ds.point_semantics:
+        raise FlicInputError(
+            sel.data, f"--semantics: {ds.format} predictions carry no semantic classes per point"
+        )
     refs = ds.refs()
-    out = check_output_dir(Path(out), ds.folders())
+    out = check_output_dir(Path(spec.out), ds.folders())
     if render is not None and render not in {r.frame for r in refs}:
         shown = sorted({r.frame for r in refs})
         span = f"{shown[0]}..{shown[-1]}" if len(shown) > 1 else str(shown[0])
         raise FlicInputError(None, f"--render {render}: no such frame among the selected ({span})")
-    seg = build_segmenter(config, method, setting, ground_remover)
+    seg = build_segmenter(config, method, setting, sel.remover_or(OWN))
     job = SegmentJob(ds, seg, setting, config.projection, wanted)
-    loop = FrameLoop(job, refs, jobs, None, skip_bad, f"segment {method}", progress)
+    loop = FrameLoop(job, refs, sel.jobs, None, sel.skip_bad, f"segment {method}", sel.progress)
     n_points = n_clusters = owned = pixels = fallbacks = 0
     renders = []
     with staged_folder(out) as stage:
