@@ -775,3 +775,45 @@ def test_organised_pcd_keeps_its_rows_and_columns(tmp_path: Path) -> None:
     assert frame.points.shape[0] == int((~gone).sum())
     expect = (15 - ring) * 900 + np.floor((np.pi - az) / (2 * np.pi) * 900).astype(int) % 900
     np.testing.assert_array_equal(frame.image.point_pixel, expect[~gone])
+
+
+def test_osf_frames_equal_the_pcap_frames(shared_data: Path, tmp_path: Path) -> None:
+    """An OSF written by ouster-sdk from the OS-2-128 pcap (where ouster-sdk is installed in
+    flic's environment) reads to the same image and points as the pcap."""
+    pytest.importorskip("ouster.sdk")
+    import subprocess
+    import sys
+
+    src = shared_data / SENSORS
+    osf = tmp_path / "in" / "os2.osf"
+    osf.parent.mkdir()
+    cli = Path(sys.executable).with_name("ouster-cli")
+    subprocess.run(
+        [cli, "source", "-m", src / (OS2 + ".json"), src / (OS2 + ".pcap"), "save", osf],
+        check=True,
+        capture_output=True,
+    )
+    ds = open_dataset(osf)
+    assert ds.format == "osf"
+    a = ds.load(ds.refs()[0])
+    pcap = open_dataset(src / (OS2 + ".pcap"))
+    b = pcap.load(pcap.refs()[0])
+    np.testing.assert_array_equal(a.image.ranges, b.image.ranges)
+    np.testing.assert_allclose(a.points, b.points, atol=1e-4)
+
+
+def test_osf_without_ouster_sdk_names_the_extra(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    import importlib.util
+
+    try:
+        if importlib.util.find_spec("ouster") is not None:
+            pytest.skip("ouster-sdk is installed")
+    except ModuleNotFoundError:
+        pass
+    d = tmp_path / "in"
+    d.mkdir()
+    (d / "x.osf").write_bytes(b"\0" * 64)
+    line = _bad(["segment", d / "x.osf"], capsys, tmp_path / "o", "x.osf")
+    assert "pip install 'flic[osf]'" in line
