@@ -767,6 +767,14 @@ def test_velodyne_32_beam_models_from_written_packets(
     el = np.arctan2(frame.points[:, 2], np.linalg.norm(frame.points[:, :2], axis=1))
     row = image.point_pixel // image.shape[1]
     assert np.abs(el - image.elevation[row]).max() < np.radians(0.3)
+    # every revolution as one pass of velodyne-decoder over the file gives it (2 complete ones
+    # and a remainder in 2.3 turns)
+    import velodyne_decoder as vd
+
+    scans = list(vd.read_pcap(str(d / "v32.pcap"), vd.Config(model=getattr(vd.Model, name))))
+    assert len(ds.refs()) == len(scans) - 1 == 2
+    for ref, scan in zip(ds.refs(), scans, strict=False):
+        np.testing.assert_array_equal(ds.load(ref).points, scan.points[:, :3])
 
 
 def test_organised_pcd_keeps_its_rows_and_columns(tmp_path: Path) -> None:
