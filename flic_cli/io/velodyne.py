@@ -21,10 +21,10 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+from numba import njit
 
 from flic_cli.errors import FlicInputError
 from flic_cli.io.base import Frame, FrameRef
-from flic_cli.io.rings import ring_image
 from flic_cli.io.sensor import FileInfo, SensorFileDataset, SensorModel
 from flic_cli.range_image import RangeImage
 
@@ -242,15 +242,56 @@ def scan_image(points: np.ndarray, model: SensorModel) -> tuple[RangeImage, np.n
         xyz = np.ascontiguousarray(points.view(np.float32).reshape(len(points), -1)[:, :3])
     else:
         xyz = np.stack([points["x"], points["y"], points["z"]], axis=1).astype(np.float32)
-    col = points["column"].astype(np.int64)
-    width = int(col.max()) + 1 if col.size else 1
-    if col.size:
-        first = col == col.min()
-        az0 = float(np.arctan2(np.mean(xyz[first, 1]), np.mean(xyz[first, 0])))
-        shift = int(np.floor((np.pi - az0) / (2 * np.pi) * width)) - int(col.min())
-        col = (col + shift) % width
-    image = ring_image(xyz, points["ring"], col, width, model.elevation)
+    h = model.elevation.size
+    ranges, counts, pix, z, width = _firing_pixels(xyz, points["column"], points["ring"], h)
+    shape = (h, width)
+    image = RangeImage(
+        ranges.reshape(shape), model.elevation, pix, "rings", counts.reshape(shape),
+        z.reshape(shape), one_point_per_pixel=bool(np.count_nonzero(ranges) == pix.size),
+    )  # fmt: skip
     return image, xyz
+
+
+@njit(cache=True)
+def _firing_pixels(
+    xyz: np.ndarray, column: np.ndarray, ring: np.ndarray, h: int
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, int]:
+    """:func:`flic_cli.io.rings.ring_image`'s pixels for a decoded scan in one kernel: W = the
+    firings (``column.max() + 1``), the firings rolled so that the first one's mean azimuth
+    lands in its nominal column, row ``h - 1 - ring``; the nearest return of a pixel wins."""
+    n = xyz.shape[0]
+    lo, hi = 1 << 30, -1
+    for i in range(n):
+        c = np.int64(column[i])
+        lo = min(lo, c)
+        hi = max(hi, c)
+    width = hi + 1 if n else 1
+    sx, sy = 0.0, 0.0
+    for i in range(n):
+        if column[i] == lo:
+            sx += xyz[i, 0]
+            sy += xyz[i, 1]
+    shift = 0
+    if n:
+        az0 = np.arctan2(sy, sx)
+        shift = np.int64(np.floor((np.pi - az0) / (2.0 * np.pi) * width)) - lo
+    ranges = np.zeros(h * width, dtype=np.float32)
+    counts = np.zeros(h * width, dtype=np.int32)
+    z = np.zeros(h * width, dtype=np.float32)
+    pix = np.empty(n, dtype=np.int64)
+    for i in range(n):
+        x = np.float64(xyz[i, 0])
+        y = np.float64(xyz[i, 1])
+        zz = np.float64(xyz[i, 2])
+        r = np.float32(np.sqrt(x * x + y * y + zz * zz))
+        c = (np.int64(column[i]) + shift) % width
+        p = (h - 1 - np.int64(ring[i])) * width + c
+        if ranges[p] == 0.0 or r < ranges[p]:
+            ranges[p] = r
+            z[p] = np.float32(zz)
+        counts[p] += 1
+        pix[i] = p
+    return ranges, counts, pix, z, width
 
 
 # ---------------------------------------------------------------------------------------------
