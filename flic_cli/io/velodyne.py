@@ -330,13 +330,14 @@ class VelodynePcapDataset(SensorFileDataset):
         return is_capture(path) and not OusterPcapDataset.accepts(path)
 
     def _open(self, path: Path) -> FileInfo:
-        from flic_cli.io.pcap import index_udp, read_payloads
+        from flic_cli.io.pcap import index_udp, iter_payloads, read_payloads
 
         index = index_udp(path)
         data = np.flatnonzero(index.size == PACKET_SIZE)
-        payloads = read_payloads(index, data)
-        keep = [i for i, p in enumerate(payloads) if is_data_packet(p)]
-        if not keep:
+        first = next(
+            (p for p in read_payloads(index, data[:64]) if is_data_packet(p)), None
+        )  # the model is read from the first data packet
+        if first is None:
             sizes = sorted(set(index.size.tolist()))[:6]
             raise FlicInputError(
                 path,
@@ -345,15 +346,23 @@ class VelodynePcapDataset(SensorFileDataset):
                 + (f" (sizes {', '.join(map(str, sizes))} bytes)" if sizes else "")
                 + ", and no Ouster metadata JSON beside it",
             )
-        data = data[keep]
-        payloads = [payloads[i] for i in keep]
-        sensor = detect_sensor(payloads, path)
+        sensor = detect_sensor([first], path)
+        kept: list[int] = []
+
+        def packets() -> Iterator[tuple[float, bytes]]:  # data packets, read a chunk at a time
+            stamps = index.time[data].tolist()
+            for k, payload in enumerate(iter_payloads(index, data)):
+                if is_data_packet(payload):
+                    kept.append(k)
+                    yield stamps[k], payload
+
         scans, partial = [], []
-        for scan in decode_scans(zip(index.time[data].tolist(), payloads, strict=True), sensor):
+        for scan in decode_scans(packets(), sensor):  # one scan in memory at once
             if scan.complete:
                 scans.append((scan.first_packet, scan.last_packet, len(scan.points)))
             else:
                 partial.append(f"remainder of {len(scan.points):,} points")
+        data = data[np.array(kept, dtype=np.int64)]
         if not scans:
             raise FlicInputError(
                 path, f"has no complete revolution ({'; '.join(partial) or 'no points'})"
