@@ -69,10 +69,19 @@ FORMATS: dict[str, Entry] = {
     "ouster": Entry(
         "flic_cli.io.ouster:OusterPcapDataset",
         "an Ouster pcap with its metadata JSON beside it, or a folder of them",
+        frames_per_file="many",
     ),
     "velodyne": Entry(
         "flic_cli.io.velodyne:VelodynePcapDataset",
         "a Velodyne pcap (VLP-16, VLP-32C, HDL-32E, HDL-64E, ...), or a folder of them",
+        frames_per_file="many",
+    ),
+    "osf": Entry(
+        "flic_cli.io.osf:OsfDataset",
+        "an Ouster OSF file, or a folder of them (pip install 'flic[osf]')",
+        frames_per_file="many",
+        requires="ouster",
+        install="pip install 'flic[osf]'",
     ),
     "pcd": Entry(
         "flic_cli.io.pcd:PcdDataset",

@@ -322,15 +322,15 @@ def _ring_cloud(beams: int = 16, width: int = 900) -> tuple[np.ndarray, np.ndarr
 
 
 @pytest.mark.parametrize("encoding", ["ascii", "binary", "binary_compressed"])
-@pytest.mark.parametrize("unit", ["radians", "centidegrees"])
+@pytest.mark.parametrize("unit", ["radians", "degrees", "centidegrees"])
 def test_pcd_encodings_and_units(tmp_path: Path, encoding: str, unit: str) -> None:
     from pypcd4 import Encoding, PointCloud
 
     xyz, ring, az = _ring_cloud()
     # the field as nebula writes it: clockwise from x, in [0, 2 pi) or 0.01 degree
     field = np.mod(-az, 2 * np.pi)
-    if unit == "centidegrees":
-        field = np.degrees(field) * 100
+    if unit != "radians":
+        field = np.degrees(field) * (100 if unit == "centidegrees" else 1)
     pc = PointCloud.from_points(
         [xyz[:, 0], xyz[:, 1], xyz[:, 2], ring.astype(np.uint16), field.astype(np.float32)],
         ("x", "y", "z", "ring", "azimuth"),
@@ -388,7 +388,9 @@ def test_nuscenes_evaluate_scores_a_label_file(
     )
     assert code == 0, err
     (label,) = seg.rglob("*.label")
-    pred = np.fromfile(label, dtype="<u4") >> 16
+    from flic_cli.labels import instance
+
+    pred = instance(np.fromfile(label, dtype="<u4"))
     ids, counts = np.unique(pred[pred > 0], return_counts=True)
     big = ids[counts >= 100][:5]
     assert big.size >= 2
@@ -610,3 +612,208 @@ def test_metadata_ambiguous_names_are_an_error(
     assert "equally well" in line
     shutil.copy(d / "rec_1.json", d / "rec_a.json")  # the same name wins
     assert open_dataset(d / "rec_a.pcap").format == "ouster"
+
+
+def test_nuscenes_root_finds_labels_through_sample_data(shared_data: Path, tmp_path: Path) -> None:
+    from flic_cli.classes import thing_mask
+
+    root = tmp_path / "nuscenes"
+    lidar = root / "samples" / "LIDAR_TOP"
+    lidar.mkdir(parents=True)
+    src = shared_data / SENSORS / NUSCENES
+    shutil.copy(src, lidar / src.name)
+    (root / "v1.0-mini").mkdir()
+    rows = [{"token": "abc123", "filename": f"samples/LIDAR_TOP/{src.name}"}]
+    (root / "v1.0-mini" / "sample_data.json").write_text(json.dumps(rows))
+    (root / "panoptic" / "v1.0-mini").mkdir(parents=True)
+    n = src.stat().st_size // 20
+    data = np.full(n, 24 * 1000, dtype=np.uint16)  # driveable surface
+    data[:100] = 17 * 1000 + 3  # car 3
+    data[100:150] = 9 * 1000 + 1  # a barrier: no SemanticKITTI thing (fence)
+    np.savez(root / "panoptic" / "v1.0-mini" / "abc123_panoptic.npz", data=data)
+    ds = open_dataset(root, require_labels=True)
+    assert ds.format == "nuscenes"
+    frame = ds.load(ds.refs()[0])
+    assert frame.labels is not None and frame.labels.shape[0] == frame.points.shape[0]
+    from flic_cli.io.nuscenes import read_panoptic
+    from flic_cli.labels import instance, semantic
+
+    full = read_panoptic(frame.ref.label_path, n)
+    sem, inst = semantic(full), instance(full)
+    assert (sem[:100] == 10).all() and (inst[:100] == 3).all()  # car
+    assert (sem[100:150] == 51).all() and (inst[100:150] == 0).all()  # fence, no instance
+    assert (sem[150:] == 40).all()  # road
+    assert thing_mask(full).sum() == 100
+
+
+def _write_pcap(path: Path, payloads: list[bytes], port: int) -> None:
+    import dpkt
+
+    with open(path, "wb") as f:
+        w = dpkt.pcap.Writer(f)
+        for k, data in enumerate(payloads):
+            udp = dpkt.udp.UDP(sport=7502, dport=port, data=data)
+            udp.ulen = len(udp)
+            ip = dpkt.ip.IP(src=b"\x0a\0\0\1", dst=b"\x0a\0\0\2", p=17, data=udp)
+            ip.len = len(ip)
+            w.writepkt(bytes(dpkt.ethernet.Ethernet(data=ip)), ts=k * 1e-3)
+
+
+def test_frames_count_complete_revolutions_inside_a_pcap(tmp_path: Path) -> None:
+    """A capture that starts and ends mid-revolution: the partial revolutions are left out,
+    ``--frames`` counts the complete ones from 0 inside the file."""
+    meta = _meta("RNG19_RFL8_SIG16_NIR16")
+    rng = np.random.default_rng(5)
+    images = [
+        rng.integers(1, 60_000, (meta.beams, meta.columns)).astype(np.uint32) for _ in range(4)
+    ]
+    packets = []
+    for k, img in enumerate(images):
+        pk = _packets(meta, img, 5 + k)
+        packets += pk[2:] if k == 0 else pk[:1] if k == 3 else pk  # cut first and last turns
+    d = tmp_path / "in"
+    d.mkdir()
+    _write_pcap(d / "rec.pcap", packets, 7502)
+    js = {
+        "beam_altitude_angles": meta.altitude_deg.tolist(),
+        "beam_azimuth_angles": meta.azimuth_deg.tolist(),
+        "lidar_mode": f"{meta.columns}x10",
+        "udp_port_lidar": 7502,
+        "data_format": {
+            "pixels_per_column": meta.beams,
+            "columns_per_packet": 16,
+            "columns_per_frame": meta.columns,
+            "pixel_shift_by_row": meta.pixel_shift.tolist(),
+            "column_window": [0, meta.columns - 1],
+            "udp_profile_lidar": meta.profile,
+        },
+    }
+    (d / "rec.json").write_text(json.dumps(js))
+    ds = open_dataset(d / "rec.pcap")
+    assert [r.frame for r in ds.refs()] == [0, 1]
+    assert len(ds.infos["rec"].partial) == 2
+    for k, ref in enumerate(ds.refs()):
+        frame = ds.load(ref)
+        expect = (destagger(images[k + 1], meta.pixel_shift) * 0.001).astype(np.float32)
+        np.testing.assert_array_equal(frame.image.ranges, expect)
+    (only,) = open_dataset(d / "rec.pcap", frames=(1, 2)).refs()
+    assert only.frame == 1
+
+
+def test_ouster_image_azimuths_match_the_points(shared_data: Path) -> None:
+    """With the per-row azimuth offsets, every valid pixel's azimuth is its point's azimuth
+    (far points, where the 14 mm beam origin offset does not matter) to a fraction of a
+    column."""
+    ds = open_dataset(shared_data / SENSORS / (OS2 + ".pcap"))
+    frame = ds.load(ds.refs()[0])
+    image = frame.image
+    assert image.has_azimuth_offset and image.one_point_per_pixel
+    far = np.linalg.norm(frame.points, axis=1) > 10
+    az_pix = image.pixel_azimuth().reshape(-1)[image.point_pixel[far]]
+    az_pts = np.arctan2(frame.points[far, 1], frame.points[far, 0])
+    d = np.abs(np.angle(np.exp(1j * (az_pix - az_pts))))
+    step = 2 * np.pi / image.shape[1]
+    assert np.percentile(d, 99) < 0.1 * step and d.max() < 0.5 * step
+
+
+@pytest.mark.parametrize(("factory", "beams", "name"), [(0x21, 32, "HDL32E"), (0x28, 32, "VLP32C")])
+def test_velodyne_32_beam_models_from_written_packets(
+    tmp_path: Path, factory: int, beams: int, name: str
+) -> None:
+    """HDL-32E / VLP-32C packets written here (one firing of 32 lasers per block, 10 m for
+    every laser): velodyne-decoder's model from the factory byte, 32 rows ordered top to bottom
+    whatever the laser order, every return in its own pixel."""
+    step = 16  # azimuth step per firing, 0.01 deg
+    packets = []
+    az = 0
+    for k in range(int(2.3 * 36000 / step / 12)):
+        buf = bytearray()
+        for _ in range(12):
+            buf += b"\xff\xee" + struct.pack("<H", az % 36000)
+            buf += struct.pack("<HB", 5000, 100) * 32  # 5000 x 2 mm
+            az += step
+        buf += struct.pack("<IBB", 1000 * k, 0x37, factory)
+        packets.append(bytes(buf))
+    d = tmp_path / "in"
+    d.mkdir()
+    _write_pcap(d / "v32.pcap", packets, 2368)
+    ds = open_dataset(d / "v32.pcap")
+    assert ds.format == "velodyne" and len(ds.refs()) >= 1
+    model = ds.sensor(ds.refs()[0])
+    assert model.name == f"Velodyne {name}" and model.beams == beams
+    assert np.all(np.diff(model.elevation) < 0)  # row 0 = top
+    frame = ds.load(ds.refs()[0])
+    image = frame.image
+    assert image.shape[0] == beams and image.one_point_per_pixel
+    assert np.count_nonzero(image.ranges) == frame.points.shape[0] > 0.9 * 2250 * beams
+    el = np.arctan2(frame.points[:, 2], np.linalg.norm(frame.points[:, :2], axis=1))
+    row = image.point_pixel // image.shape[1]
+    assert np.abs(el - image.elevation[row]).max() < np.radians(0.3)
+
+
+def test_organised_pcd_keeps_its_rows_and_columns(tmp_path: Path) -> None:
+    """An organised cloud (HEIGHT rows of WIDTH points, NaN where no return, no ring field):
+    the image is HEIGHT x WIDTH, every point in the pixel of its row and its azimuth's column."""
+    from pypcd4 import MetaData, PointCloud
+
+    xyz, ring, az = _ring_cloud(16, 900)
+    order = np.lexsort((-az, -ring))  # top ring first, azimuth decreasing along the row
+    xyz, ring, az = xyz[order], ring[order], az[order]
+    gone = np.random.default_rng(2).random(xyz.shape[0]) < 0.1
+    xyz[gone] = np.nan
+    data = np.empty(xyz.shape[0], dtype=[("x", "<f4"), ("y", "<f4"), ("z", "<f4")])
+    data["x"], data["y"], data["z"] = xyz.T
+    meta = MetaData.model_validate(
+        {"fields": ("x", "y", "z"), "size": (4, 4, 4), "type": ("F", "F", "F"),
+         "count": (1, 1, 1), "points": xyz.shape[0], "width": 900, "height": 16}
+    )  # fmt: skip
+    path = tmp_path / "organised.pcd"
+    PointCloud(meta, data).save(path)
+    ds = open_dataset(path)
+    frame = ds.load(ds.refs()[0])
+    assert frame.image.shape == (16, 900) and frame.n_read == 16 * 900
+    assert frame.points.shape[0] == int((~gone).sum())
+    expect = (15 - ring) * 900 + np.floor((np.pi - az) / (2 * np.pi) * 900).astype(int) % 900
+    np.testing.assert_array_equal(frame.image.point_pixel, expect[~gone])
+
+
+def test_osf_frames_equal_the_pcap_frames(shared_data: Path, tmp_path: Path) -> None:
+    """An OSF written by ouster-sdk from the OS-2-128 pcap (where ouster-sdk is installed in
+    flic's environment) reads to the same image and points as the pcap."""
+    pytest.importorskip("ouster.sdk")
+    import subprocess
+    import sys
+
+    src = shared_data / SENSORS
+    osf = tmp_path / "in" / "os2.osf"
+    osf.parent.mkdir()
+    cli = Path(sys.executable).with_name("ouster-cli")
+    subprocess.run(
+        [cli, "source", "-m", src / (OS2 + ".json"), src / (OS2 + ".pcap"), "save", osf],
+        check=True,
+        capture_output=True,
+    )
+    ds = open_dataset(osf)
+    assert ds.format == "osf"
+    a = ds.load(ds.refs()[0])
+    pcap = open_dataset(src / (OS2 + ".pcap"))
+    b = pcap.load(pcap.refs()[0])
+    np.testing.assert_array_equal(a.image.ranges, b.image.ranges)
+    np.testing.assert_allclose(a.points, b.points, atol=1e-4)
+
+
+def test_osf_without_ouster_sdk_names_the_extra(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    import importlib.util
+
+    try:
+        if importlib.util.find_spec("ouster") is not None:
+            pytest.skip("ouster-sdk is installed")
+    except ModuleNotFoundError:
+        pass
+    d = tmp_path / "in"
+    d.mkdir()
+    (d / "x.osf").write_bytes(b"\0" * 64)
+    line = _bad(["segment", d / "x.osf"], capsys, tmp_path / "o", "x.osf")
+    assert "pip install 'flic[osf]'" in line

@@ -25,12 +25,13 @@ from pathlib import Path
 
 import numpy as np
 
+from flic_cli.classes import THING_LUT
 from flic_cli.errors import FlicInputError
 from flic_cli.io.base import Frame, FrameRef
 from flic_cli.io.pcd import cloud_geometry, kept_points
 from flic_cli.io.rings import ring_image
 from flic_cli.io.sensor import FileInfo, SensorFileDataset, SensorModel
-from flic_cli.labels import encode as encode_labels
+from flic_cli.labels import encode
 
 FORMAT = "nuscenes"
 SUFFIX = ".pcd.bin"
@@ -91,7 +92,7 @@ def read_panoptic(path: str | Path, n_points: int) -> np.ndarray:
     """(N,) uint32 SemanticKITTI-encoded labels of a Panoptic nuScenes ``.npz``.
 
     The semantic class is :data:`CATEGORY_TO_KITTI` of ``data // 1000``, the instance id
-    ``data % 1000`` (0 = none; stuff classes carry none).
+    ``data % 1000`` for SemanticKITTI thing classes, 0 for the others.
 
     Raises
     ------
@@ -115,8 +116,8 @@ def read_panoptic(path: str | Path, n_points: int) -> np.ndarray:
     if cat.size and (cat.min() < 0 or cat.max() >= lut.size):
         raise FlicInputError(path, f"has category {int(cat.max())}, beyond nuScenes' 32")
     sem = lut[cat]
-    inst = np.where(sem > 0, data % 1000, 0)
-    return encode_labels(sem.astype(np.uint32), inst.astype(np.uint32))
+    inst = np.where(THING_LUT[sem], data % 1000, 0)  # barrier / traffic cone: stuff here
+    return encode(sem.astype(np.uint32), inst.astype(np.uint32))
 
 
 def _token_labels(root: Path) -> dict[str, Path]:
@@ -229,12 +230,5 @@ class NuScenesDataset(SensorFileDataset):
             labels = read_panoptic(label_path, pts.shape[0])
             if state.keep is not None:
                 labels = labels[state.keep]
-        ref = FrameRef(self.sequence_name(info.path), k, info.path, label_path, FORMAT)
+        ref = FrameRef(self.sequence_name(info.path), k, info.path, label_path, FORMAT, index=k)
         return Frame(ref, xyz, labels, image, finite=state.keep)
-
-
-def load_labelled(ref: FrameRef) -> Frame:
-    """A labelled sweep from its reference alone (evaluation workers)."""
-    ds = NuScenesDataset(ref.path, require_labels=True)
-    (own,) = ds.refs()
-    return ds.load(own)

@@ -238,6 +238,21 @@ class OusterMeta:
         """``"Ouster OS-2-128"`` (or ``"Ouster (N beams)"`` without a product line)."""
         return f"Ouster {self.prod_line}" if self.prod_line else f"Ouster ({self.beams} beams)"
 
+    @cached_property
+    def azimuth_offset(self) -> np.ndarray:
+        """(H,) azimuth of every beam in the destaggered image relative to its column's centre
+        as :class:`flic_cli.range_image.RangeImage` places it (radians): the destaggered
+        column ``c`` of beam ``i`` holds measurement ``c - shift[i]``, whose direction lies at
+        encoder angle ``2 pi (1 - (c - shift[i]) / W)`` minus the beam's azimuth, turned by
+        the half turn of ``lidar_to_sensor_transform``; the column's centre is
+        ``pi - (c + 0.5) 2 pi / W``. (The beam origin offset is left out: it shifts the points,
+        not the direction, by under 3 cm.)"""
+        w = self.columns
+        turn = float(np.arctan2(self.lidar_to_sensor[1, 0], self.lidar_to_sensor[0, 0]))
+        off = 2 * np.pi * self.pixel_shift / w - np.radians(self.azimuth_deg) + np.pi / w
+        off = off + turn - np.pi  # the default transform turns by pi: offset as above
+        return np.angle(np.exp(1j * off))
+
     def sensor_model(self) -> SensorModel:
         """The range image's sensor model: beam angles from the metadata.
 
@@ -245,7 +260,7 @@ class OusterMeta:
         column centre :class:`flic_cli.range_image.RangeImage` assumes (radians).
         """
         w = self.columns
-        offset = 2 * np.pi * self.pixel_shift / w - np.radians(self.azimuth_deg) + np.pi / w
+        offset = self.azimuth_offset
         notes = []
         if self.defaulted:
             notes.append("defaulted as ouster-sdk does: " + ", ".join(self.defaulted))
@@ -584,7 +599,10 @@ def frame_image(frame: OusterFrame, meta: OusterMeta) -> tuple[RangeImage, np.nd
     """
     direction, offset = meta.xyz_lut
     ranges, pix, counts, points = _image_points(frame.range_mm, meta.pixel_shift, direction, offset)
-    image = RangeImage(ranges, np.radians(meta.altitude_deg), pix, "native", counts)
+    image = RangeImage(
+        ranges, np.radians(meta.altitude_deg), pix, "native", counts,
+        azimuth_offset=meta.azimuth_offset, one_point_per_pixel=True,
+    )  # fmt: skip
     return image, points
 
 
@@ -788,7 +806,7 @@ class OusterPcapDataset(SensorFileDataset):
         except (OusterDataError, ValueError) as exc:
             raise FlicInputError(info.path, f"frame {k} cannot be decoded ({exc})") from None
         image, points = frame_image(frame, state.meta)
-        ref = FrameRef(self.sequence_name(info.path), k, info.path, None, FORMAT)
+        ref = FrameRef(self.sequence_name(info.path), k, info.path, None, FORMAT, index=k)
         return Frame(ref, points, None, image)
 
 

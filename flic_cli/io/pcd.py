@@ -1,9 +1,11 @@
 """PCD point clouds (ASCII, binary, binary_compressed), read with pypcd4; one frame per file.
 
-The range image: rows from a ring field (``ring``, ``channel``, ``laser_id``, ``line``; rings
-ranked by their points' median elevation, so the top beam is row 0 whatever the numbering),
-columns from an ``azimuth`` field when there is one, otherwise from the points' azimuth; the
-number of columns from the median azimuth step between a ring's neighbouring points.
+The range image: an organised cloud (HEIGHT > 1, as ROS drivers write Ouster and Velodyne
+clouds) keeps its rows and columns. Otherwise rows come from a ring field (``ring``,
+``channel``, ``laser_id``, ``line``; ids in elevation order are rows, else the rings are ranked
+by their points' median elevation, so the top beam is row 0 whatever the numbering), columns
+from an ``azimuth`` field when there is one, else from the points' azimuth, and the number of
+columns from the median azimuth step between a ring's neighbouring points.
 
 Azimuth units are detected from the values: at most 2 pi + 0.01 -> radians, at most 360.5 ->
 degrees, at most 36,000 x 1.05 -> 0.01 degree (RoboSense / nebula's ``azimuth``); the field's
@@ -190,8 +192,65 @@ def cloud_geometry(
     return CloudGeometry(ring_rank, columns, width, elevation, model)
 
 
+def organised_geometry(
+    points: np.ndarray, kept: np.ndarray, width: int, height: int, name: str
+) -> CloudGeometry:
+    """Rows and columns of an organised cloud (HEIGHT rows of WIDTH points, a beam per row, as
+    ROS drivers write Ouster and Velodyne clouds): row and column from the point's position,
+    rows turned so that row 0 is the top beam, columns turned and rolled to the image's azimuth
+    convention (fitted against the points' azimuths).
+
+    Parameters
+    ----------
+    points : (N_kept, 3) xyz of the points kept.
+    kept : (width * height,) bool, which stored points those are.
+    """
+    index = np.flatnonzero(kept)
+    row, col = index // width, index % width
+    xyz = points.astype(np.float64)
+    el = np.arctan2(xyz[:, 2], np.hypot(xyz[:, 0], xyz[:, 1]))
+    med = np.full(height, np.nan)
+    for r in np.unique(row):
+        med[r] = np.median(el[row == r])
+    have = np.flatnonzero(~np.isnan(med))
+    top_first = have.size < 2 or med[have[0]] > med[have[-1]]
+    ring = (height - 1 - row) if top_first else row  # 0 = lowest
+    full = np.interp(np.arange(height), have, med[have]) if have.size else np.zeros(height)
+    elevation = full if top_first else full[::-1].copy()
+    step = 2 * np.pi / width
+    sign, zero = fit_azimuth(col * step, np.arctan2(xyz[:, 1], xyz[:, 0]))
+    # azimuth = zero + sign * col * step; the image wants pi - (c + 0.5) * step
+    c0 = (np.pi - zero) / step - 0.5
+    column = np.rint(c0 - sign * col).astype(np.int64) % width
+    model = SensorModel(
+        name=name,
+        elevation=elevation,
+        azimuth_offset=np.zeros(height),
+        columns=width,
+        angles_from="fields",
+        columns_from="the organised cloud's WIDTH",
+        notes=(
+            f"organised cloud: {height} rows x {width} columns (HEIGHT x WIDTH)",
+            "rows from the point's row, elevations = median per row",
+        ),
+    )
+    return CloudGeometry(np.asarray(ring, dtype=np.int64), column, width, elevation, model)
+
+
 def read_pcd(path: str | Path) -> np.ndarray:
-    """The points of a PCD file as a structured array (pypcd4).
+    """The points of a PCD file as a structured array (pypcd4); see :func:`read_pcd_shape`.
+
+    Raises
+    ------
+    FlicInputError
+        When pypcd4 cannot read it or it has no x, y, z fields.
+    """
+    return read_pcd_shape(path)[0]
+
+
+def read_pcd_shape(path: str | Path) -> tuple[np.ndarray, int, int]:
+    """``(points, width, height)`` of a PCD file: the structured array (pypcd4) and the header's
+    WIDTH and HEIGHT (an organised cloud has HEIGHT > 1: one row per beam).
 
     Raises
     ------
@@ -203,7 +262,9 @@ def read_pcd(path: str | Path) -> np.ndarray:
     except ImportError:  # pragma: no cover - a core dependency
         raise FlicInputError(path, "reading PCD needs pypcd4 (pip install pypcd4)") from None
     try:
-        data = PointCloud.from_path(str(path)).pc_data
+        cloud = PointCloud.from_path(str(path))
+        data = cloud.pc_data
+        width, height = int(cloud.metadata.width), int(cloud.metadata.height)
     except Exception as exc:  # noqa: BLE001 - pypcd4 raises many kinds on bad files
         raise FlicInputError(
             path, f"is not a readable PCD file ({type(exc).__name__}: {exc})"
@@ -216,7 +277,7 @@ def read_pcd(path: str | Path) -> np.ndarray:
             f"has no {'/'.join(missing)} field (fields: {', '.join(names) or 'none'}): a PCD "
             "needs x, y and z",
         )
-    return data
+    return data, width, height
 
 
 def kept_points(xyz: np.ndarray, min_range: float = 0.0) -> np.ndarray:
@@ -242,9 +303,13 @@ class PcdDataset(SensorFileDataset):
     suffixes = (".pcd",)
 
     def _open(self, path: Path) -> FileInfo:
-        data = read_pcd(path)
+        data, width, height = read_pcd_shape(path)
         xyz = np.stack([data["x"], data["y"], data["z"]], axis=1).astype(np.float32)
         keep = kept_points(xyz)
+        if 1 < height <= 1024 and width > 1 and width * height == xyz.shape[0] and keep.any():
+            geo = organised_geometry(xyz[keep], keep, width, height, f"PCD ({path.name})")
+            state = _PcdState(None if keep.all() else keep, geo)
+            return FileInfo(path, 1, geo.model, np.array([int(keep.sum())]), [], state)
         names = data.dtype.names or ()
         ring_name = next((n for n in RING_FIELDS if n in names), None)
         ring = data[ring_name][keep].astype(np.int64) if ring_name else None
@@ -269,5 +334,5 @@ class PcdDataset(SensorFileDataset):
             xyz = np.ascontiguousarray(xyz[state.keep])
         g = state.geometry
         image = ring_image(xyz, g.ring, g.column, g.width, g.elevation)
-        ref = FrameRef(self.sequence_name(info.path), k, info.path, None, FORMAT)
+        ref = FrameRef(self.sequence_name(info.path), k, info.path, None, FORMAT, index=k)
         return Frame(ref, xyz, None, image, finite=state.keep)

@@ -71,6 +71,8 @@ def ring_image(
         "rings",
         counts.reshape(shape),
         z.reshape(shape),
+        one_point_per_pixel=bool(np.count_nonzero(ranges) == pix.size),
+        every_point_has_pixel=True,
     )
 
 

@@ -105,8 +105,9 @@ class SensorFileDataset:
     A subclass sets ``format`` and ``suffixes``, implements ``_open(path) -> FileInfo`` (read
     the recording once, find its revolutions) and ``_load(info, k) -> Frame``. The sequence name
     of a recording is its file name without suffix; its frames are numbered 0, 1, ... in the
-    file. Predictions are written as SemanticKITTI ``.label`` files, one value per point of the
-    frame as the reader gives it (``<out>/sequences/<name>/predictions/NNNNNN.label``).
+    file (``FrameRef.frame`` and ``FrameRef.index`` both). Predictions are written as
+    SemanticKITTI ``.label`` files, one value per point of the frame as the reader gives it
+    (``<out>/sequences/<name>/predictions/NNNNNN.label``).
     """
 
     format = ""
@@ -119,8 +120,7 @@ class SensorFileDataset:
         frames: tuple[int | None, int | None] | None = None,
         require_labels: bool = False,
     ) -> None:
-        from flic_cli.io.base import FrameRef, select_sequences
-        from flic_cli.io.semantickitti import frames_text, in_frames
+        from flic_cli.io.base import FrameRef, frames_text, in_frames, select_sequences
 
         self.root = Path(root)
         files = self._files(self.root)
@@ -141,7 +141,7 @@ class SensorFileDataset:
                 label = info.label_paths[k] if info.label_paths else None
                 if require_labels and label is None:
                     raise FlicInputError(path, "has no ground-truth labels for its frames")
-                self._refs.append(FrameRef(name, k, path, label, self.format))
+                self._refs.append(FrameRef(name, k, path, label, self.format, index=k))
         if not self._refs:
             what = "" if frames is None else f" in frames {frames_text(frames)}"
             raise FlicInputError(self.root, f"has no complete frame{what}")
@@ -200,7 +200,7 @@ class SensorFileDataset:
 
     def load(self, ref):  # noqa: ANN001, ANN201
         """Read one frame (a :class:`flic_cli.io.base.Frame` with its sensor range image)."""
-        return self._load(self.infos[ref.sequence], ref.frame)
+        return self._load(self.infos[ref.sequence], ref.index)
 
     @staticmethod
     def write_prediction(

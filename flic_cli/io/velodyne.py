@@ -340,5 +340,5 @@ class VelodynePcapDataset(SensorFileDataset):
         state: _PcapState = info.state  # type: ignore[assignment]
         scan = self._scan(state, k, info.path)
         image, points = scan_image(scan.points, info.sensor)
-        ref = FrameRef(self.sequence_name(info.path), k, info.path, None, FORMAT)
+        ref = FrameRef(self.sequence_name(info.path), k, info.path, None, FORMAT, index=k)
         return Frame(ref, points, None, image)

@@ -129,10 +129,6 @@ def load_labelled_frame(dataset: Dataset, ref: FrameRef) -> Frame:
     FlicInputError
         When the frame has no labels, or cannot be read.
     """
-    if ref.format == "nuscenes" and ref.label_path is not None:  # Panoptic nuScenes .npz
-        from flic_cli.io.nuscenes import load_labelled
-
-        return load_labelled(ref)
     frame = dataset.load(ref)
     if frame.labels is None:
         raise FlicInputError(
