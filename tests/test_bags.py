@@ -326,3 +326,35 @@ def test_ouster_ros_pointcloud2_gives_the_pcaps_frame(shared_data, tmp_path):
     d = np.degrees(ds.beams.elevation - ref_frame.image.elevation)
     assert np.abs(d).max() < 0.5 and 0.2 < np.median(d) < 0.4
     np.testing.assert_array_equal(frame.points, ref_frame.points)
+
+
+@pytest.mark.parametrize("kind", ["ros1", "sqlite3", "mcap"])
+def test_index_times_equal_the_messages_times(tmp_path, kind):
+    """Frames are listed from the bag's own index where it has one (ROS 1, sqlite3): the same
+    times as reading every message; MCAP has none here (None: the reader reads the topic)."""
+    from flic_cli.io.bag import index_times, open_reader
+
+    st = bagtools.store()
+    times = [5, 17, 17, 17, 40, 1000]
+
+    def cloud(k):
+        return bagtools.cloud_msg(st, {c: np.arange(1.0, 21.0) + 100 * k for c in "xyz"})
+
+    msgs = [("/p", "sensor_msgs/msg/PointCloud2", t, cloud(k)) for k, t in enumerate(times)]
+    msgs.append(("/q", "sensor_msgs/msg/PointCloud2", 9, cloud(99)))
+    bag = bagtools.write_bag(tmp_path / ("i.bag" if kind == "ros1" else "i"), kind, msgs)
+    reader = open_reader(bag)
+    try:
+        conns = [c for c in reader.connections if c.topic == "/p"]
+        got = index_times(reader, conns, bag)
+        read = [t for _, t, _ in reader.messages(connections=conns)]
+    finally:
+        reader.close()
+    assert read == times
+    assert got == (None if kind == "mcap" else times)
+    with pytest.warns(UserWarning, match="PointCloud2 without ring field and not organised"):
+        ds = open_dataset(bag, ["/p"])
+    refs = ds.refs()
+    assert [r.frame for r in refs] == [0, 1, 2, 3, 4, 5]
+    for k in [3, 2, 0, 1, 2, 3, 4, 5, 1]:  # out of order, and messages sharing a time
+        assert ds.load(refs[k]).points[0, 0] == 1 + 100 * k, k
