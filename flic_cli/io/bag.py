@@ -18,10 +18,11 @@ every revolution on the topic is one frame, numbered from 0 in recording order. 
   topic of the bag (``.../metadata``), decoded by :mod:`flic_cli.io.ouster`; one frame = the
   packets of one ``frame_id``.
 
-The bag is read as a stream: the constructor reads the topic once for its frames' timestamps
-(and the beams of its first revolution), :meth:`BagDataset.load` reads one frame, continuing
-where the previous one ended when frames are loaded in order. Memory does not grow with the
-bag's length.
+The bag is read as a stream: the constructor lists the frames' times from the bag's own index
+(ROS 1 connection index, sqlite3 ``messages`` table; MCAP storage and Ouster packets, whose
+frames are frame ids, are read once for them) and reads the first revolution for the beams;
+:meth:`BagDataset.load` reads one frame, continuing where the previous one ended when frames
+are loaded in order (else it seeks by time). Memory does not grow with the bag's length.
 """
 
 from __future__ import annotations
