@@ -10,6 +10,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from flic_cli.labels import N_IDS, has_instance, semantic
+
 #: Raw SemanticKITTI class id -> name.
 CLASS_NAMES: dict[int, str] = {
     0: "unlabeled",
@@ -65,7 +67,7 @@ def class_name(cls: int) -> str:
 
 def _lut(classes: tuple[int, ...]) -> np.ndarray:
     """Read-only boolean lookup table over all 16-bit semantic ids."""
-    lut = np.zeros(1 << 16, dtype=bool)
+    lut = np.zeros(N_IDS, dtype=bool)
     lut[list(classes)] = True
     lut.setflags(write=False)
     return lut
@@ -87,7 +89,7 @@ def ground_mask(labels: np.ndarray) -> np.ndarray:
     -------
     (N,) bool, True where the semantic class is in :data:`GROUND_CLASSES`.
     """
-    return GROUND_LUT[np.asarray(labels).astype(np.uint32, copy=False) & 0xFFFF]
+    return GROUND_LUT[semantic(labels)]
 
 
 def thing_mask(labels: np.ndarray) -> np.ndarray:
@@ -101,8 +103,7 @@ def thing_mask(labels: np.ndarray) -> np.ndarray:
     -------
     (N,) bool.
     """
-    labels = np.asarray(labels).astype(np.uint32, copy=False)
-    return THING_LUT[labels & 0xFFFF] & (labels > 0xFFFF)
+    return THING_LUT[semantic(labels)] & has_instance(labels)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -137,7 +138,7 @@ LEARNING_STUFF: tuple[int, ...] = (9, 10, 11, 12, 13, 14, 15, 16, 17, 18, 19)
 
 
 def _learning_lut() -> np.ndarray:
-    lut = np.zeros(1 << 16, dtype=np.int64)
+    lut = np.zeros(N_IDS, dtype=np.int64)
     lut[list(LEARNING_MAP)] = list(LEARNING_MAP.values())
     lut.setflags(write=False)
     return lut
@@ -161,4 +162,4 @@ def learning_class(labels: np.ndarray) -> np.ndarray:
     -------
     (N,) int64 training class ids in ``0..19`` (0 = unlabeled, ignored).
     """
-    return LEARNING_LUT[np.asarray(labels).astype(np.uint32, copy=False) & 0xFFFF]
+    return LEARNING_LUT[semantic(labels)]

@@ -16,7 +16,7 @@ from numba import njit
 from pydantic import Field, model_validator
 from pydantic.dataclasses import dataclass
 
-from flic_cli.config.component import STRICT
+from flic_cli.component import STRICT
 from flic_cli.range_image import RangeImage
 
 
@@ -530,4 +530,5 @@ def _project_spherical(
         "spherical",
         counts.reshape(rows, width),
         heights.reshape(rows, width),
+        every_point_has_pixel=False,
     )

@@ -16,7 +16,7 @@ Conventions (the same for SemanticKITTI and Moosmann logs):
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import InitVar, dataclass, field
 
 import numpy as np
 from numba import njit
@@ -24,7 +24,7 @@ from numba import njit
 
 @dataclass(frozen=True)
 class RangeImage:
-    """A range image and the map from points to pixels.
+    """A range image, the sensor geometry of its pixels and the map from points to pixels.
 
     Attributes
     ----------
@@ -34,34 +34,57 @@ class RangeImage:
         Elevation of each row in radians, positive up, row 0 = top beam.
     point_pixel : (N,) int64 array
         Flat pixel index (``row * W + col``) of every point of the scan; -1 for a point that has
-        no pixel (outside the vertical field of view of a spherical projection).
+        no pixel (outside the vertical field of view of a spherical projection, or left out of
+        its pixel by a ground step, :func:`flic_cli.ground.base.leave_pixels`).
     projection : str
-        ``"rings"`` (KITTI ring recovery), ``"spherical"`` (KITTI spherical projection) or
-        ``"native"`` (the sensor's own image, Moosmann logs).
-    counts : (H, W) int32 array or None
-        Number of points that fell into each pixel, when the projection counted them (it does,
-        at no extra cost); use :meth:`point_counts`, which counts when this is None.
+        Display name of how the image was made: ``"rings"`` (KITTI ring recovery),
+        ``"spherical"`` (KITTI spherical projection) or ``"native"`` (a sensor's own image).
+        Nothing branches on it: what the methods need is in the typed fields below.
+    counts : (H, W) int32 array or None, init only
+        Number of points in every pixel, given by whoever made ``point_pixel`` when it counted
+        them in the same pass (the projection kernels do); otherwise derived from
+        ``point_pixel`` on first use. Read it with :meth:`point_counts`; never stored by
+        callers (``dataclasses.replace`` with a new ``point_pixel`` derives it anew).
     point_z : (H, W) float32 array or None
         Height (z, metres) of every pixel's nearest point, 0 where empty, when the image was
         projected from points (the projection keeps it at no extra cost); None for a sensor's
         own image, whose pixels lie on their row's elevation. A projected pixel's point is not:
         its row's elevation is a median over the beam (rings) or the middle of a bin
         (spherical). See :meth:`heights`.
-    attached : (K, 3) int64 array or None
-        Held pixels, set by a ground step (step 8 of
-        :class:`flic_cli.ground.column.ColumnGround`): per row a held pixel, the pixel standing
-        on it whose cluster its points take (-1: none) and its number of points. The
-        clusterers leave held pixels out (they link nothing) and count their points towards
-        the cluster they take.
+    azimuth_offset : (H,) float64 array
+        Azimuth offset of every row in radians, added to the column's centre (see
+        :meth:`pixel_azimuth`): a sensor whose beams do not fire at one azimuth (Ouster's
+        ``beam_azimuth_angles``). Default (None): zeros.
+    one_point_per_pixel : bool
+        Every valid pixel holds exactly one point and no point shares a pixel (a sensor's own
+        image): the methods need not read the counts.
+    every_point_has_pixel : bool
+        No entry of ``point_pixel`` is -1 (ring recovery, a sensor's own image; not a spherical
+        projection, whose field of view may miss points).
     """
 
     ranges: np.ndarray
     elevation: np.ndarray
     point_pixel: np.ndarray
-    projection: str
-    counts: np.ndarray | None = field(default=None, repr=False, compare=False)
+    projection: str = "native"
+    counts: InitVar[np.ndarray | None] = None
     point_z: np.ndarray | None = field(default=None, repr=False, compare=False)
-    attached: np.ndarray | None = field(default=None, repr=False, compare=False)
+    azimuth_offset: np.ndarray | None = field(default=None, repr=False, compare=False)
+    one_point_per_pixel: bool = False
+    every_point_has_pixel: bool = True
+
+    def __post_init__(self, counts: np.ndarray | None) -> None:
+        h = self.ranges.shape[0]
+        if self.azimuth_offset is None:
+            object.__setattr__(self, "azimuth_offset", np.zeros(h))
+        else:
+            offset = np.ascontiguousarray(self.azimuth_offset, dtype=np.float64)
+            if offset.shape != (h,):
+                raise ValueError(f"azimuth_offset has shape {offset.shape}, the image {h} rows")
+            object.__setattr__(self, "azimuth_offset", offset)
+        if counts is not None and counts.shape != self.ranges.shape:
+            raise ValueError(f"counts have shape {counts.shape}, the image {self.ranges.shape}")
+        object.__setattr__(self, "_counts", counts)
 
     @property
     def shape(self) -> tuple[int, int]:
@@ -72,6 +95,16 @@ class RangeImage:
         """(W,) azimuth of each column's centre in radians (+pi at column 0, decreasing)."""
         w = self.ranges.shape[1]
         return np.pi - (np.arange(w) + 0.5) * (2.0 * np.pi / w)
+
+    @property
+    def has_azimuth_offset(self) -> bool:
+        """Whether any row's azimuth is offset from its column's centre."""
+        return bool(np.any(self.azimuth_offset))
+
+    def pixel_azimuth(self) -> np.ndarray:
+        """(H, W) azimuth of every pixel in radians: its column's centre plus its row's
+        offset."""
+        return self.azimuth[None, :] + self.azimuth_offset[:, None]
 
     @property
     def valid(self) -> np.ndarray:
@@ -90,12 +123,15 @@ class RangeImage:
         A pixel's range comes from its nearest point; this counts all of them (e.g. for minimum
         cluster sizes counted in points rather than pixels).
         """
-        if self.counts is not None:
-            return self.counts
-        pix = self.point_pixel
-        if self.projection == "spherical":
-            pix = pix[pix >= 0]
-        return np.bincount(pix, minlength=self.ranges.size).astype(np.int32).reshape(self.shape)
+        counts = self._counts  # type: ignore[attr-defined]
+        if counts is None:
+            pix = self.point_pixel
+            if not self.every_point_has_pixel:
+                pix = pix[pix >= 0]
+            counts = np.bincount(pix, minlength=self.ranges.size).astype(np.int32)
+            counts = counts.reshape(self.shape)
+            object.__setattr__(self, "_counts", counts)
+        return counts
 
     def heights(self) -> np.ndarray:
         """(H, W) float32 height of every pixel's point relative to the sensor, in metres (z up);
@@ -111,7 +147,7 @@ class RangeImage:
         Pixels without a measurement give the origin.
         """
         el = self.elevation[:, None]
-        az = self.azimuth[None, :]
+        az = self.pixel_azimuth() if self.has_azimuth_offset else self.azimuth[None, :]
         r = self.ranges.astype(np.float64)
         xyz = np.stack(
             [r * np.cos(el) * np.cos(az), r * np.cos(el) * np.sin(az), r * np.sin(el)], axis=-1
@@ -128,10 +164,10 @@ class RangeImage:
         """
         pix = self.point_pixel if pixels is None else np.asarray(pixels, dtype=np.int64)
         el = self.elevation
-        az = self.azimuth
+        cos_az, sin_az, per_row = _azimuth_tables(self)
         return _pixel_points(
             self.ranges.reshape(-1), pix, self.ranges.shape[1],
-            np.cos(el), np.sin(el), np.cos(az), np.sin(az),
+            np.cos(el), np.sin(el), cos_az, sin_az, per_row,
         )  # fmt: skip
 
     def point_labels(self, pixel_labels: np.ndarray) -> np.ndarray:
@@ -146,12 +182,22 @@ class RangeImage:
         (N,) int32 array, 0 for points without a pixel.
         """
         flat = pixel_labels.reshape(-1)
-        if self.projection != "spherical":  # every point has a pixel
+        if self.every_point_has_pixel:
             return flat.take(self.point_pixel).astype(np.int32, copy=False)
         out = np.zeros(self.point_pixel.size, dtype=np.int32)
         has = self.point_pixel >= 0
         out[has] = flat[self.point_pixel[has]]
         return out
+
+
+def _azimuth_tables(image: RangeImage) -> tuple[np.ndarray, np.ndarray, int]:
+    """cos and sin of the azimuth as the point kernels read them: (1, W) of the column centres
+    and row stride 0 without row offsets, else (H, W) of every pixel and row stride 1."""
+    if image.has_azimuth_offset:
+        az = image.pixel_azimuth()
+        return np.cos(az), np.sin(az), 1
+    az = image.azimuth[None, :]
+    return np.cos(az), np.sin(az), 0
 
 
 @njit(cache=True)
@@ -163,34 +209,42 @@ def _pixel_points(
     sin_el: np.ndarray,
     cos_az: np.ndarray,
     sin_az: np.ndarray,
+    per_row: int,
 ) -> np.ndarray:
     """Points of the pixels ``pix`` of a flat range image, computed as :meth:`RangeImage.to_points`
-    does (float64, the same products in the same order, then float32)."""
+    does (float64, the same products in the same order, then float32); the azimuth of (row,
+    col) is read at ``cos_az[row * per_row, col]`` (:func:`_azimuth_tables`)."""
     out = np.empty((pix.size, 3), dtype=np.float32)
     for j in range(pix.size):
         p = pix[j]
         row = p // width
         col = p - row * width
+        ar = row * per_row
         r = np.float64(ranges[p])
-        out[j, 0] = np.float32(r * cos_el[row] * cos_az[col])
-        out[j, 1] = np.float32(r * cos_el[row] * sin_az[col])
+        out[j, 0] = np.float32(r * cos_el[row] * cos_az[ar, col])
+        out[j, 1] = np.float32(r * cos_el[row] * sin_az[ar, col])
         out[j, 2] = np.float32(r * sin_el[row])
     return out
 
 
-def from_sensor_image(ranges: np.ndarray, elevation: np.ndarray) -> RangeImage:
-    """Wrap a sensor's own range image (Moosmann logs): every valid pixel is one point.
+def from_sensor_image(
+    ranges: np.ndarray, elevation: np.ndarray, azimuth_offset: np.ndarray | None = None
+) -> RangeImage:
+    """Wrap a sensor's own range image (Moosmann logs, sensor readers): every valid pixel is one
+    point.
 
     Parameters
     ----------
     ranges : (H, W) float32 array, metres, 0 = no measurement.
     elevation : (H,) row elevations in radians, positive up, row 0 = top.
+    azimuth_offset : (H,) azimuth offset of every row in radians, added to the column's centre
+        (e.g. Ouster's ``beam_azimuth_angles``); default zeros.
     """
-    return _from_sensor_image(ranges, elevation, False)[0]
+    return _from_sensor_image(ranges, elevation, azimuth_offset, False)[0]
 
 
 def from_sensor_image_with_points(
-    ranges: np.ndarray, elevation: np.ndarray
+    ranges: np.ndarray, elevation: np.ndarray, azimuth_offset: np.ndarray | None = None
 ) -> tuple[RangeImage, np.ndarray]:
     """:func:`from_sensor_image` and the scan's points in one pass over the image.
 
@@ -200,25 +254,50 @@ def from_sensor_image_with_points(
     points : (N, 3) float32 Cartesian point of every valid pixel, in the order of
         ``image.point_pixel`` (row-major), equal to ``image.to_points()[image.point_pixel]``.
     """
-    image, points = _from_sensor_image(ranges, elevation, True)
+    image, points = _from_sensor_image(ranges, elevation, azimuth_offset, True)
     assert points is not None
     return image, points
 
 
 def _from_sensor_image(
-    ranges: np.ndarray, elevation: np.ndarray, with_points: bool
+    ranges: np.ndarray,
+    elevation: np.ndarray,
+    azimuth_offset: np.ndarray | None,
+    with_points: bool,
 ) -> tuple[RangeImage, np.ndarray | None]:
     ranges = np.ascontiguousarray(ranges, dtype=np.float32)
     elevation = np.asarray(elevation, dtype=np.float64)
     pix, counts = _sensor_pixels(ranges)
-    image = RangeImage(ranges, elevation, pix, "native", counts)
+    image = RangeImage(
+        ranges, elevation, pix, "native", counts, azimuth_offset=azimuth_offset,
+        one_point_per_pixel=True, every_point_has_pixel=True,
+    )  # fmt: skip
     if not with_points:
         return image, None
-    az = image.azimuth
+    cos_az, sin_az, per_row = _azimuth_tables(image)
     points = _sensor_points(
-        ranges, np.cos(elevation), np.sin(elevation), np.cos(az), np.sin(az), pix.size
+        ranges, np.cos(elevation), np.sin(elevation), cos_az, sin_az, per_row, pix.size
     )
     return image, points
+
+
+def sensor_subset(image: RangeImage, keep: np.ndarray) -> RangeImage:
+    """A sensor's own image (:attr:`RangeImage.one_point_per_pixel`) with only the points
+    ``keep`` (the other pixels emptied); its geometry is kept.
+
+    Parameters
+    ----------
+    image : the image of a sensor, one point per valid pixel.
+    keep : (N,) bool over ``image.point_pixel``.
+    """
+    pix = image.point_pixel[keep]
+    ranges = np.zeros(image.ranges.size, dtype=np.float32)
+    ranges[pix] = image.ranges.reshape(-1)[pix]
+    return RangeImage(
+        ranges.reshape(image.ranges.shape), image.elevation, pix, image.projection,
+        azimuth_offset=image.azimuth_offset, one_point_per_pixel=image.one_point_per_pixel,
+        every_point_has_pixel=image.every_point_has_pixel,
+    )  # fmt: skip
 
 
 @njit(cache=True)
@@ -248,6 +327,7 @@ def _sensor_points(
     sin_el: np.ndarray,
     cos_az: np.ndarray,
     sin_az: np.ndarray,
+    per_row: int,
     n: int,
 ) -> np.ndarray:
     """(n, 3) float32 points of the ``n`` valid pixels of an (H, W) image in row-major order,
@@ -258,12 +338,14 @@ def _sensor_points(
     for row in range(h):
         ce = cos_el[row]
         se = sin_el[row]
+        ca = cos_az[row * per_row]
+        sa = sin_az[row * per_row]
         for col in range(w):
             rf = ranges[row, col]
             if rf > 0:
                 r = np.float64(rf)
-                out[3 * j] = np.float32(r * ce * cos_az[col])
-                out[3 * j + 1] = np.float32(r * ce * sin_az[col])
+                out[3 * j] = np.float32(r * ce * ca[col])
+                out[3 * j + 1] = np.float32(r * ce * sa[col])
                 out[3 * j + 2] = np.float32(r * se)
                 j += 1
     return out.reshape(n, 3)

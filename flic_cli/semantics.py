@@ -1,7 +1,8 @@
 """Semantics in the predictions: ``flic segment --semantics none | oracle | DIR``.
 
 A panoptic prediction holds, per point, a semantic class (lower 16 bits of the ``.label`` value)
-and an instance id (upper 16 bits). flic clusters; the semantics come from elsewhere:
+and an instance id (upper 16 bits). flic clusters; the semantics come from elsewhere
+(reading and writing them: :mod:`flic_cli.io.semantickitti`):
 
 - ``none`` -- semantic class 0 everywhere (flic's historical output, class-agnostic clusters);
 - ``oracle`` -- each point's ground-truth raw class (:func:`oracle_semantics`), the upper bound of
@@ -31,7 +32,8 @@ unclustered points (e.g. to 0, unlabeled) would hide them too, but it changes th
 (every such point becomes a false negative of its class). So :func:`combine` keeps every point's
 semantic class (the mIoU is untouched) and gives each unclustered thing point an instance id of
 its own: a one-point segment, below any ``min_points >= 2``, never an FP. The ids follow the
-largest cluster id (numbered per raw class, in scan order); should a frame have more such points
+largest cluster id (numbered across all classes, in scan order: no two such points share an id,
+whatever their classes); should a frame have more such points
 than free ids, the ids repeat cyclically, so a segment holds at most
 ``ceil(points / free ids)`` far-apart points (an error if that would reach 50).
 
@@ -44,27 +46,17 @@ are then one per raw class, as in the ground truth).
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import numpy as np
 
 from flic_cli.classes import CLASS_NAMES, THING_LUT
-from flic_cli.errors import FlicInputError
-from flic_cli.io.semantickitti import (
-    encode_labels,
-    predictions_path,
-    read_label,
-    write_predictions,
-)
+from flic_cli.labels import MAX_ID, N_IDS, encode, semantic
 
 __all__ = [
     "MODES",
     "cluster_mask",
     "combine",
+    "known_classes",
     "oracle_semantics",
-    "read_semantics",
-    "semantics_path",
-    "write_semantic_predictions",
 ]
 
 #: The named modes of ``--semantics`` (anything else is a folder).
@@ -73,44 +65,14 @@ MODES: tuple[str, ...] = ("none", "oracle")
 #: Largest id a segment made of unclustered points may reach without ever counting as FP.
 _MAX_SINGLETON_SEGMENT = 49
 
-_KNOWN = np.zeros(1 << 16, dtype=bool)
+_KNOWN = np.zeros(N_IDS, dtype=bool)
 _KNOWN[list(CLASS_NAMES)] = True
 
 
-def semantics_path(root: str | Path, sequence: str, frame: int) -> Path:
-    """``<root>/sequences/<sequence>/predictions/<frame:06d>.label`` (see the module docstring)."""
-    return predictions_path(root, sequence, frame)
-
-
-def read_semantics(root: str | Path, sequence: str, frame: int, n_points: int) -> np.ndarray:
-    """Read a semantic network's classes for one frame.
-
-    Parameters
-    ----------
-    root : the ``--semantics`` folder (``<root>/sequences/<NN>/predictions/<XXXXXX>.label``).
-    sequence, frame : which frame.
-    n_points : number of points of the scan as stored in its ``.bin`` (one label each).
-
-    Returns
-    -------
-    (N,) uint16 raw SemanticKITTI class ids (the lower 16 bits of each label).
-
-    Raises
-    ------
-    FlicInputError
-        Naming the file when it is missing, holds another number of labels than the scan has
-        points, or holds a class that SemanticKITTI does not define.
-    """
-    path = semantics_path(root, sequence, frame)
-    sem = (read_label(path, n_points) & 0xFFFF).astype(np.uint16)
-    unknown = np.unique(sem[~_KNOWN[sem]])
-    if unknown.size:
-        listed = ", ".join(str(int(u)) for u in unknown[:5])
-        more = f" and {unknown.size - 5} more" if unknown.size > 5 else ""
-        raise FlicInputError(
-            path, f"holds semantic classes that SemanticKITTI does not define: {listed}{more}"
-        )
-    return sem
+def known_classes(semantics: np.ndarray) -> np.ndarray:
+    """(N,) bool: True where a raw class id is one SemanticKITTI defines
+    (:data:`flic_cli.classes.CLASS_NAMES`)."""
+    return _KNOWN[np.asarray(semantics)]
 
 
 def oracle_semantics(gt_labels: np.ndarray) -> np.ndarray:
@@ -124,7 +86,7 @@ def oracle_semantics(gt_labels: np.ndarray) -> np.ndarray:
     -------
     (N,) uint16 raw class ids (moving classes stay moving, lane-marking stays lane-marking).
     """
-    return (np.asarray(gt_labels).astype(np.uint32, copy=False) & 0xFFFF).astype(np.uint16)
+    return semantic(gt_labels).astype(np.uint16)
 
 
 def cluster_mask(semantics: np.ndarray) -> np.ndarray:
@@ -138,7 +100,7 @@ def cluster_mask(semantics: np.ndarray) -> np.ndarray:
     -------
     (N,) bool.
     """
-    return THING_LUT[np.asarray(semantics).astype(np.uint32, copy=False) & 0xFFFF]
+    return THING_LUT[semantic(semantics)]
 
 
 def combine(semantics: np.ndarray, cluster_ids: np.ndarray) -> np.ndarray:
@@ -153,9 +115,9 @@ def combine(semantics: np.ndarray, cluster_ids: np.ndarray) -> np.ndarray:
 
     Returns
     -------
-    (N,) uint32 labels ``instance << 16 | semantic``: thing points in a cluster carry its id,
-    unclustered thing points one-point segments (ids above the largest cluster id, counted per
-    raw class), every other point instance 0.
+    (N,) uint32 labels (:func:`flic_cli.labels.encode`): thing points in a cluster carry its id,
+    unclustered thing points one-point segments (ids above the largest cluster id, one per
+    point across all classes), every other point instance 0.
 
     Raises
     ------
@@ -169,49 +131,21 @@ def combine(semantics: np.ndarray, cluster_ids: np.ndarray) -> np.ndarray:
         raise ValueError(
             f"semantics and cluster_ids must be 1-D of one length, got {sem.shape}, {ids.shape}"
         )
-    if sem.size and (sem.min() < 0 or sem.max() > 0xFFFF):
-        raise ValueError("semantic ids must lie in 0..65535")
+    if sem.size and (sem.min() < 0 or sem.max() > MAX_ID):
+        raise ValueError(f"semantic ids must lie in 0..{MAX_ID}")
     thing = cluster_mask(sem)
     clustered = thing & (ids > 0)
-    instance = np.where(clustered, ids, 0)
+    inst = np.where(clustered, ids, 0)
     loose = np.flatnonzero(thing & ~clustered)
     if loose.size:
-        top = int(instance.max(initial=0))
-        free = 0xFFFF - top
-        order = loose[np.argsort(sem[loose], kind="stable")]  # by class, then scan order
-        groups = sem[order]
-        starts = np.flatnonzero(np.r_[True, groups[1:] != groups[:-1]])
-        rank = np.arange(order.size) - np.repeat(starts, np.diff(np.r_[starts, order.size]))
-        largest = int(np.diff(np.r_[starts, order.size]).max())
-        if free < 1 or -(-largest // free) > _MAX_SINGLETON_SEGMENT:
+        top = int(inst.max(initial=0))
+        free = MAX_ID - top
+        # one id per point across all classes (in scan order), so that tools scoring the
+        # instance id alone (label >> 16) do not merge a car point with a person point
+        if free < 1 or -(-loose.size // free) > _MAX_SINGLETON_SEGMENT:
             raise ValueError(
-                f"{largest} unclustered points of one thing class and {top} clusters do not fit "
-                "16-bit instance ids as segments of under 50 points"
+                f"{loose.size} unclustered thing points and {top} clusters do not fit 16-bit "
+                "instance ids as segments of under 50 points"
             )
-        instance[order] = top + 1 + rank % free
-    return encode_labels(sem, instance)
-
-
-def write_semantic_predictions(
-    out_root: str | Path,
-    sequence: str,
-    frame: int,
-    semantics: np.ndarray,
-    cluster_ids: np.ndarray,
-) -> Path:
-    """Write one frame's panoptic prediction: :func:`combine`, then
-    :func:`flic_cli.io.semantickitti.write_predictions`.
-
-    Parameters
-    ----------
-    out_root : the output root (``<out_root>/sequences/<NN>/predictions/<XXXXXX>.label``).
-    sequence, frame : which frame.
-    semantics : (N,) raw class ids, one per point of the scan as stored.
-    cluster_ids : (N,) cluster ids (0 = unclustered), one per point of the scan as stored.
-
-    Returns
-    -------
-    The written file.
-    """
-    labels = combine(semantics, cluster_ids)
-    return write_predictions(out_root, sequence, frame, labels >> 16, labels & 0xFFFF)
+        inst[loose] = top + 1 + np.arange(loose.size) % free
+    return encode(sem, inst)

@@ -41,7 +41,7 @@ def main() -> None:
         image = ds.load(ref).image
         theirs = np.fromfile(args.masks / f"{i:05d}.ground", dtype=np.uint8)
         theirs = theirs.reshape(image.ranges.shape).astype(bool)
-        ours = remover(image, None)
+        ours = remover.extract(image, None).mask
         valid = image.ranges > 0
         rows.append(
             {

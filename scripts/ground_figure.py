@@ -53,7 +53,7 @@ def main() -> None:
     fig, axes = plt.subplots(1, len(names), figsize=(7 * len(names), 7.4), squeeze=False)
     for ax, name in zip(axes[0], names, strict=True):
         remover = cfg.remover(name)
-        taken = point_ground(prep.image, remover(prep.image, pts))
+        taken = point_ground(prep.image, remover.extract(prep.image, pts).mask)
         counts = ground_counts(labels, taken)
         layers = [
             (taken & ~(is_thing), "#d9d9d9", 0.4, "taken as ground"),

@@ -131,7 +131,7 @@ def main() -> None:
         cat = categories(rho, z, thing)
         thing_feet = (cat == 4) | (cat == 5)
         other_feet = (cat == 1) | (cat == 2)
-        col = column(img)
+        col = column.extract(img, g.points).mask
         on_ground = GROUND_LUT[g.labels & 0xFFFF]
         grounds["labels, per point"].append(Ground(gr, leave_pixels(img, gr, on_ground), on_ground))
         for name, mask in (

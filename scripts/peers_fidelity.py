@@ -40,6 +40,7 @@ from sklearn.metrics import adjusted_rand_score  # noqa: E402
 from flic_cli.classes import ground_mask, learning_class  # noqa: E402
 from flic_cli.config import load_config  # noqa: E402
 from flic_cli.io import open_dataset  # noqa: E402
+from flic_cli.labels import semantic  # noqa: E402
 from flic_cli.methods.alpine import Alpine  # noqa: E402
 from flic_cli.methods.cvc import Cvc  # noqa: E402
 from flic_cli.methods.slr import slr_pixels  # noqa: E402
@@ -87,7 +88,7 @@ def main(data: Path, out: Path) -> None:
         labels = np.fromfile(ref.label_path, dtype=np.uint32)
         row = {"sequence": ref.sequence, "frame": ref.frame}
         # ---- ALPINE, oracle semantics, every point of the scan
-        sem_ref = np.vectorize(mapper.__getitem__)(labels & 0xFFFF).astype(np.int32)
+        sem_ref = np.vectorize(mapper.__getitem__)(semantic(labels)).astype(np.int32)
         sem_flic = learning_class(labels)
         assert (sem_ref == sem_flic).all()
         things = (sem_flic >= 1) & (sem_flic <= 8)

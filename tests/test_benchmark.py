@@ -33,7 +33,7 @@ ENV_KEYS = {
     "command",
     "date",
     "warmup",
-    "dbscan_every",
+    "slow_every",
     "repeat",
     "format",
 }
@@ -129,7 +129,7 @@ def _check_outputs(out: Path, n_frames: int, methods: list[str], dbscan_frames: 
     assert {"numpy", "scipy", "numba", "sklearn"} <= set(env["versions"])
     assert env["threads"]["requested"] == 1 and env["threads"]["numba"] == 1
     assert set(env["warmup"]["first_call_ms"]) == {*methods, *STAGES}
-    assert env["dbscan_every"] == 2
+    assert env["slow_every"] == 2
     return frames, summary, env
 
 
@@ -187,7 +187,7 @@ def test_benchmark_frame_selection_and_threads(small_sample, tmp_path):
     ("args", "message"),
     [
         (["--methods", "flic0,nope"], "unknown method 'nope'"),
-        (["--dbscan-every", "0"], "--dbscan-every"),
+        (["--dbscan-every", "0"], "--slow-every"),
         (["--threads", "0"], "--threads"),
     ],
 )
@@ -203,16 +203,11 @@ def test_benchmark_bad_input(small_sample, tmp_path, args, message):
 def test_speedups_on_few_frames_are_marked_as_indications(small_sample, tmp_path):
     from flic_cli.config import load_config
     from flic_cli.runs.benchmark import run_benchmark
+    from flic_cli.runs.spec import BenchmarkRun, Selection
 
+    sel = Selection(small_sample.moosmann_log, config=load_config(), progress=False)
     result = run_benchmark(
-        small_sample.moosmann_log,
-        tmp_path / "b",
-        ["flic0", "dbscan"],
-        load_config(),
-        warmup=1,
-        dbscan_every=2,
-        plots=False,
-        progress=False,
+        BenchmarkRun(sel, tmp_path / "b", ["flic0", "dbscan"], warmup=1, slow_every=2, plots=False)
     )
     text = result.report()
     assert "~: fewer than 30 frames timed (flic0 n = 3, dbscan n = 2)" in text
@@ -223,18 +218,13 @@ def test_rounds_keep_each_frames_median(small_sample, tmp_path, monkeypatch):
     """--rounds N: N passes over the selection, each frame's time the median over the passes."""
     from flic_cli.config import load_config
     from flic_cli.runs import benchmark
+    from flic_cli.runs.spec import BenchmarkRun, Selection
 
     times = iter([float(t) for t in range(1, 1000)])
     monkeypatch.setattr(benchmark, "_timed", lambda func, repeat: (func(), 1e6 * next(times)))
+    sel = Selection(small_sample.moosmann_log, config=load_config(), progress=False)
     result = benchmark.run_benchmark(
-        small_sample.moosmann_log,
-        tmp_path / "b",
-        ["flic0"],
-        load_config(),
-        warmup=0,
-        rounds=3,
-        plots=False,
-        progress=False,
+        BenchmarkRun(sel, tmp_path / "b", ["flic0"], warmup=0, rounds=3, plots=False)
     )
     flic0 = result.frames[result.frames["method"] == "flic0"]
     assert len(flic0) == 3 and result.environment["rounds"] == 3

@@ -209,6 +209,8 @@ def test_ground_pixels_show_free_space_but_are_not_nodes():
 
 
 def test_bridge_component_counts_points_and_maps_to_points():
+    from flic_cli.ground.base import Ground
+
     ranges = wall(6.0, slice(100, 130), slice(30, 32))  # 60 pixels
     pix = np.repeat(np.flatnonzero(ranges.reshape(-1) > 0), 2)  # two points per pixel
     img = RangeImage(ranges, ELEVATION, pix, "rings")
@@ -217,7 +219,7 @@ def test_bridge_component_counts_points_and_maps_to_points():
     assert (Bridge(min_size=121).segment(img, pts, None) == 0).all()
     ground = np.zeros(ranges.shape, bool)
     ground[31] = True
-    assert (Bridge(min_size=60).segment(img, pts, ground) > 0).sum() == 60
+    assert (Bridge(min_size=60).segment(img, pts, Ground.from_mask(img, ground)) > 0).sum() == 60
 
 
 def test_bridge_is_a_configurable_method(tmp_path):

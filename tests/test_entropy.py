@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from flic_cli.io.semantickitti import encode_labels
+from flic_cli.labels import encode
 from flic_cli.metrics.entropy import (
     continuous_clustering_ground_truth,
     object_ids,
@@ -69,9 +69,9 @@ def test_brute_force_on_random_frames() -> None:
 
 
 def test_object_ids_are_the_protocols_objects() -> None:
-    car = encode_labels(np.full(120, 10), np.full(120, 1))
-    small_car = encode_labels(np.full(50, 10), np.full(50, 2))
-    building = encode_labels(np.full(200, 50), np.zeros(200, dtype=int))
+    car = encode(np.full(120, 10), np.full(120, 1))
+    small_car = encode(np.full(50, 10), np.full(50, 2))
+    building = encode(np.full(200, 50), np.zeros(200, dtype=int))
     ids = object_ids(np.concatenate([car, small_car, building]))
     assert (ids[:120] == 1).all() and (ids[120:] == 0).all()
 
@@ -84,7 +84,7 @@ def test_continuous_clustering_ground_truth() -> None:
     road = rng.normal(0, 0.1, (40, 3)) + [0, 9, 0]
     pts = np.vstack([a, b, c, road])
     labels = np.concatenate(
-        [encode_labels(np.full(65, 50), np.zeros(65, dtype=int)), np.full(40, 40, np.uint32)]
+        [encode(np.full(65, 50), np.zeros(65, dtype=int)), np.full(40, 40, np.uint32)]
     )
     gt = continuous_clustering_ground_truth(pts, labels)
     assert len(set(gt[:30])) == 1 and len(set(gt[30:60])) == 1 and gt[0] != gt[30] != 0

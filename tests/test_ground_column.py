@@ -12,13 +12,24 @@ from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 from numba import njit
 
-from flic_cli.ground import REMOVERS, ColumnGround, column_ground
+from flic_cli.ground import REMOVERS, ColumnGround
+from flic_cli.ground.base import Ground as GroundStep
 from flic_cli.ground.base import leave_pixels
 from flic_cli.io import open_dataset
 from flic_cli.range_image import RangeImage, from_sensor_image
 from flic_cli.sample import HDL64_PITCH_DEG, Box, Cylinder, Ground, Scene, cast, kitti_azimuths
 
 H_S = 1.73
+
+
+def column_ground(image: RangeImage, held: np.ndarray | None = None, **kw: object) -> np.ndarray:
+    """The column remover's ground pixels of ``image`` with the parameters ``kw`` (steps 1-6; the
+    mask does not depend on steps 7 and 8); ``held``, if given, is filled with step 8's held
+    cells: those step 6 would take but for the foot and under test."""
+    ground = ColumnGround(**{"hidden_points": False, **kw}).extract(image, None)
+    if held is not None:
+        held[...] = ground.held
+    return ground.mask
 
 
 def _scene(ground: Ground, boxes=(), cylinders=()) -> Scene:
@@ -105,9 +116,15 @@ def test_people_on_the_sidewalk_are_kept_and_the_sidewalk_removed():
 def test_a_wall_and_an_empty_image_have_no_ground():
     elevation = np.radians(np.linspace(-2, -20, 16))
     wall = (5.0 / np.cos(elevation)).astype(np.float32)[:, None].repeat(8, 1)
-    image = RangeImage(wall, elevation, np.arange(wall.size), "native")
+    image = RangeImage(wall, elevation, np.arange(wall.size), "native", one_point_per_pixel=True)
     assert not column_ground(image).any()
-    empty = RangeImage(np.zeros((4, 8), np.float32), elevation[:4], np.zeros(0, np.int64), "native")
+    empty = RangeImage(
+        np.zeros((4, 8), np.float32),
+        elevation[:4],
+        np.zeros(0, np.int64),
+        "native",
+        one_point_per_pixel=True,
+    )
     assert not column_ground(empty).any()
 
 
@@ -115,7 +132,9 @@ def test_a_wall_and_an_empty_image_have_no_ground():
 @given(arrays(np.float32, (8, 12), elements=st.sampled_from([0.0, 2.0, 4.5, 7.0, 12.0, 30.0])))
 def test_empty_pixels_are_never_ground(ranges):
     elevation = np.radians(np.linspace(-3, -24, 8))
-    image = RangeImage(ranges, elevation, np.flatnonzero(ranges.reshape(-1)), "native")
+    image = RangeImage(
+        ranges, elevation, np.flatnonzero(ranges.reshape(-1)), "native", one_point_per_pixel=True
+    )
     ground = column_ground(image)
     assert ground.shape == ranges.shape
     assert not ground[ranges == 0].any()
@@ -126,7 +145,7 @@ def test_column_is_a_registered_component_with_validated_parameters():
     with pytest.raises(ValueError):
         ColumnGround(noise_m=-1.0)
     image, _, _ = _image(_scene(STREET))
-    assert np.array_equal(ColumnGround()(image, None), column_ground(image))
+    assert np.array_equal(ColumnGround().extract(image, None).mask, column_ground(image))
 
 
 # ---- the previous implementation (flic 4eec351), the reference of the optimised kernel ----------
@@ -361,7 +380,9 @@ RANDOM_RANGES = arrays(
 def _random_image(ranges: np.ndarray) -> RangeImage:
     """A sensor's own image of ``ranges`` with rows from -2 to -24 deg."""
     elevation = np.radians(np.linspace(-2, -24, 10))
-    return RangeImage(ranges, elevation, np.flatnonzero(ranges.reshape(-1)), "native")
+    return RangeImage(
+        ranges, elevation, np.flatnonzero(ranges.reshape(-1)), "native", one_point_per_pixel=True
+    )
 
 
 @settings(max_examples=60, deadline=None)
@@ -497,7 +518,9 @@ def _image_of(rho: np.ndarray, z: np.ndarray) -> RangeImage:
     valid = rho > 0
     assert np.allclose(z[valid], (rho * np.tan(el)[:, None])[valid])
     ranges = np.where(valid, np.hypot(rho, z), 0.0).astype(np.float32)
-    return RangeImage(ranges, el, np.flatnonzero(ranges.reshape(-1)), "native")
+    return RangeImage(
+        ranges, el, np.flatnonzero(ranges.reshape(-1)), "native", one_point_per_pixel=True
+    )
 
 
 def _dip(rho: np.ndarray, z: np.ndarray, rows: slice, depth: float) -> None:
@@ -615,10 +638,12 @@ def test_step_7_takes_a_hidden_road_point_and_keeps_the_object_and_a_raised_poin
     # the image the clusterers see, made in the same pass, is the generic one of that decision
     want = leave_pixels(image, mask, got)
     assert np.array_equal(clustered.point_pixel, want.point_pixel)
-    assert np.array_equal(clustered.counts, want.counts)
+    assert np.array_equal(clustered.point_counts(), want.point_counts())
     # off, or on a sensor's own image (one point per pixel): every point takes its pixel's
     assert ColumnGround(hidden_points=False).point_ground(image, points, mask) is None
-    native = RangeImage(image.ranges, image.elevation, np.arange(n), "native")
+    native = RangeImage(
+        image.ranges, image.elevation, np.arange(n), "native", one_point_per_pixel=True
+    )
     assert ColumnGround().point_ground(native, points[:n], mask) is None
     # the row test: no taken pixel within reach of the point, nothing taken
     far = mask.copy()
@@ -678,7 +703,7 @@ def test_step_7_equals_the_plain_reference_on_the_shared_frames(kitti_root):
     ds = open_dataset(kitti_root)
     for ref in ds.refs()[1::12]:
         prep = prepare(ds.load(ref), "ground", cfg.projection)
-        _check_step_7(prep.image, prep.points, ColumnGround()(prep.image, prep.points))
+        _check_step_7(prep.image, prep.points, ColumnGround().extract(prep.image, prep.points).mask)
 
 
 @settings(max_examples=40, deadline=None)
@@ -700,36 +725,30 @@ def test_step_7_equals_the_plain_reference_on_random_scans(seed):
         pts, width=64, mode="spherical", rows=6, fov_up_deg=5.0, fov_down_deg=-20.0
     )
     _check_step_7(image, pts, rng.random(image.shape) < 0.5)
-    _check_step_7(image, pts, ColumnGround()(image, pts))
+    _check_step_7(image, pts, ColumnGround().extract(image, pts).mask)
 
 
 def test_the_clusterers_leave_out_the_points_taken_behind_a_pixel():
-    from flic_cli.ground.base import extract_ground
     from flic_cli.methods.dbscan import Dbscan
     from flic_cli.methods.flic import Flic
 
     image, points, mask = _hidden_scan()
-    remover = ColumnGround()
-    ground = extract_ground(lambda im, pts: mask, image, points)  # a remover without step 7
+    ground = GroundStep.from_mask(image, mask)  # a remover without step 7
     assert ground.image is image and ground.decided is None
     assert ground.on_ground.tolist() == mask.reshape(-1)[image.point_pixel].tolist()
 
-    class WithStep7:
-        def __call__(self, im: RangeImage, pts: np.ndarray) -> np.ndarray:
-            return mask
-
-        point_ground = remover.point_ground
-
-    ground = extract_ground(WithStep7(), image, points)
+    on_ground, clustered = ColumnGround().point_ground(image, points, mask)
+    ground = GroundStep(mask, clustered, on_ground)
     n = mask.size
     assert ground.on_ground[n:].tolist() == [True, False]
     assert ground.image.point_pixel[n] == -1  # the hidden road point left its pixel
     assert ground.image.point_pixel[n + 1] == 20 + 10
-    assert ground.image.counts[1, 10] == 2 and image.counts[1, 10] == 3
+    assert ground.image.point_counts()[1, 10] == 2 and image.point_counts()[1, 10] == 3
     # every clusterer gives it no label; the pixel's other points keep theirs
-    flic = Flic(min_size=1).segment(ground.image, points, ground.mask)
-    assert flic[n] == 0 and flic[20 + 10] > 0 and flic[n + 1] == flic[20 + 10]
-    dbscan = Dbscan(eps_m=3.0, min_samples=1, min_size=1).segment(ground.image, points, mask)
+    for backend in ("numba", "scipy"):
+        flic = Flic(min_size=1, backend=backend).segment(ground.image, points, ground)
+        assert flic[n] == 0 and flic[20 + 10] > 0 and flic[n + 1] == flic[20 + 10]
+    dbscan = Dbscan(eps_m=3.0, min_samples=1, min_size=1).segment(ground.image, points, ground)
     assert dbscan[n] == 0 and dbscan[20 + 10] > 0
 
 
@@ -785,8 +804,8 @@ def test_pixels_of_a_projected_scan_lie_at_their_nearest_point():
 def test_a_projected_road_is_ground_at_its_points_heights():
     image, pts = _projected_road()
     valid = image.ranges > 0
-    at_points = ColumnGround()(image, pts)
-    at_rows = ColumnGround(point_heights=False)(image, pts)
+    at_points = ColumnGround().extract(image, pts).mask
+    at_rows = ColumnGround(point_heights=False).extract(image, pts).mask
     assert np.array_equal(column_ground(image), at_points)
     assert np.array_equal(column_ground(image, point_heights=False), at_rows)
     assert at_points[valid].mean() > 0.999
@@ -818,8 +837,8 @@ def test_the_foot_of_what_stands_on_the_ground_is_held_not_taken():
     mask, held = _held(image, foot_deg=85.0)  # not a foot at 85 deg: ground, nothing held
     assert mask[2, 15:21].all() and not held.any()
     remover = ColumnGround()
-    assert np.array_equal(remover.split(image)[1], _held(image)[1])
-    assert ColumnGround(hold_feet=False).split(image)[1] is None
+    assert np.array_equal(remover.extract(image).held, _held(image)[1])
+    assert ColumnGround(hold_feet=False).extract(image).held is None
 
 
 def _held_property(image: RangeImage, **kw) -> None:
@@ -853,18 +872,20 @@ def _column_image() -> tuple[RangeImage, np.ndarray]:
     el = np.radians([0.0, -1.0, -2.0, -3.0, -4.0])
     ranges = np.full((5, 1), 10.0, dtype=np.float32)
     counts = np.ones((5, 1), dtype=np.int32)
-    image = RangeImage(ranges, el, np.arange(5), "native", counts)
+    image = RangeImage(ranges, el, np.arange(5), "native", counts, one_point_per_pixel=True)
     return image, np.zeros((5, 1), dtype=bool)
 
 
 def test_a_held_foot_takes_the_cell_standing_on_it():
     image = _image_of(*_foot_street())  # 40 columns; row 1 stands on row 2, columns 15-20
-    mask, held, attached = ColumnGround().split(image)
+    ground = ColumnGround().extract(image)
     cols = np.arange(15, 21)
+    attached = ground.attached
     assert sorted(attached.tolist()) == [[80 + c, 40 + c, 1] for c in cols]  # 0.3 m apart
-    assert np.array_equal(np.sort(attached[:, 0]), np.flatnonzero(held))
-    assert (ColumnGround(attach_m=0.2).split(image)[2][:, 1] == -1).all()
-    assert ColumnGround(hold_feet=False).split(image)[1:] == (None, None)
+    assert np.array_equal(np.sort(attached[:, 0]), np.flatnonzero(ground.held))
+    assert (ColumnGround(attach_m=0.2).extract(image).attached[:, 1] == -1).all()
+    no_hold = ColumnGround(hold_feet=False).extract(image)
+    assert no_hold.held is None and no_hold.attached is None
 
 
 def test_held_cells_standing_on_ground_or_held_cells():
@@ -885,12 +906,17 @@ def test_held_cells_standing_on_ground_or_held_cells():
     assert _attached(cells, standers, ground, held, counts, False, 1)[:, 1].tolist() == [1, -1, -1]
 
 
-def _attached(image: RangeImage, rows: list[tuple[int, int]]) -> RangeImage:
-    """``image`` with held pixels ``(pixel, target)`` (one point each)."""
-    import dataclasses
-
-    attached = np.array([(p, t, 1) for p, t in rows], dtype=np.int64)
-    return dataclasses.replace(image, attached=attached)
+def _attached(
+    image: RangeImage, held: np.ndarray, rows: list[tuple[int, int]] | None
+) -> GroundStep:
+    """A ground step on ``image`` with nothing ground, the cells ``held`` held and attached as
+    ``rows``, ``(pixel, target)`` (one point each; None: held without attachments, as a plain
+    mask of pixels left out)."""
+    none = np.zeros(image.shape, dtype=bool)
+    if rows is None:
+        return GroundStep.from_mask(image, held)
+    attached = np.array([(p, t, 1) for p, t in rows], dtype=np.int64).reshape(-1, 3)
+    return GroundStep(none, image, held=held, attached=attached)
 
 
 @pytest.mark.parametrize("kind", ["flic", "flic-scipy", "bridge", "bogoslavskyi", "dbscan"])
@@ -909,19 +935,27 @@ def test_held_points_count_towards_the_minimum_size_and_link_nothing(kind):
     image, held = _column_image()
     points = image.to_points()[image.point_pixel]
     held[3:] = True
-    with_held = _attached(image, [(3, 2), (4, 2)])
-    assert method(5).segment(with_held, points, held).tolist() == [1, 1, 1, 1, 1]
-    assert method(6).segment(with_held, points, held).tolist() == [0, 0, 0, 0, 0]
+    with_held = _attached(image, held, [(3, 2), (4, 2)])
+    assert method(5).segment(image, points, with_held).tolist() == [1, 1, 1, 1, 1]
+    assert method(6).segment(image, points, with_held).tolist() == [0, 0, 0, 0, 0]
     # without the attachment, the held cells are left out and the rest is too small for 5
-    assert method(5).segment(image, points, held).tolist() == [0, 0, 0, 0, 0]
+    bare = _attached(image, held, None)
+    assert method(5).segment(image, points, bare).tolist() == [0, 0, 0, 0, 0]
     # a held cell between two clusters links nothing: rows 0-1 and 3-4 stay apart
     held = np.zeros_like(held)
     held[2] = True
     ranges = image.ranges.copy()
     ranges[1] = 30.0  # row 1 far behind: row 2 has no cell within 0.5 m above it
-    far = RangeImage(ranges, image.elevation, np.arange(5), "native", image.counts)
+    far = RangeImage(
+        ranges,
+        image.elevation,
+        np.arange(5),
+        "native",
+        image.point_counts(),
+        one_point_per_pixel=True,
+    )
     points = far.to_points()[far.point_pixel]
-    got = method(1).segment(_attached(far, [(2, -1)]), points, held).tolist()
+    got = method(1).segment(far, points, _attached(far, held, [(2, -1)])).tolist()
     assert got[2] == 0 and got[3] == got[4] and len({got[0], got[1], got[3]}) == 3
 
 
@@ -930,16 +964,16 @@ def test_held_points_count_towards_the_minimum_size_and_link_nothing(kind):
 )
 def test_held_points_take_the_cluster_standing_on_them(kitti_root, name):
     from flic_cli.config import load_config
-    from flic_cli.ground.base import extract_ground, pixel_owners
+    from flic_cli.ground.base import pixel_owners
     from flic_cli.runs.pipeline import build_segmenter, cluster_ground, prepare
 
     cfg = load_config()
     seg = build_segmenter(cfg, name, "ground", "column")
     ds = open_dataset(kitti_root)
     prep = prepare(ds.load(ds.refs()[0]), "ground", cfg.projection)
-    ground = extract_ground(seg.remover, prep.image, prep.points)
+    ground = seg.remover.extract(prep.image, prep.points)
     assert ground.held.any() and not (ground.held & ground.mask).any()
-    attached = ground.image.attached
+    attached = ground.attached
     assert np.array_equal(np.sort(attached[:, 0]), np.flatnonzero(ground.held))
     # a held pixel counts the points that stay in it (not those step 7 took as ground)
     counts = ground.image.point_counts().reshape(-1)

@@ -64,7 +64,7 @@ def test_patchworkpp_removes_a_flat_road_and_keeps_a_box(small_sample):
     ds = open_dataset(small_sample.kitti_root)
     frame = ds.load(ds.refs()[0])
     image = project_points(frame.points)
-    ground = REMOVERS["patchworkpp"]()(image, frame.points)
+    ground = REMOVERS["patchworkpp"]().extract(image, frame.points).mask
     assert ground.shape == image.ranges.shape
     assert not ground[image.ranges == 0].any()
     on = ground.reshape(-1)[image.point_pixel]

@@ -19,8 +19,6 @@ from flic_cli.io import (
     SemanticKittiDataset,
     atomic_write,
     atomic_write_bytes,
-    encode_labels,
-    instance,
     open_dataset,
     parse_frames,
     parse_sequences,
@@ -33,7 +31,6 @@ from flic_cli.io import (
     read_poses,
     read_predictions,
     read_scan,
-    semantic,
     write_bin,
     write_calib,
     write_img_cfg,
@@ -42,6 +39,7 @@ from flic_cli.io import (
     write_poses,
     write_predictions,
 )
+from flic_cli.labels import encode, instance, semantic
 
 RNG = np.random.default_rng(0)
 CFG = ImgCfg(16, 4, 180.0, -180.0, np.array([-2.0, 3.5, 9.0, 24.5]))
@@ -164,7 +162,7 @@ def test_bin_with_three_columns_gets_zero_remission(tmp_path: Path) -> None:
 @given(st.lists(st.tuples(st.integers(0, 0xFFFF), st.integers(0, 0xFFFF)), min_size=1, max_size=50))
 def test_label_round_trip(tmp_path_factory: pytest.TempPathFactory, pairs: list) -> None:
     sem, ins = (np.array(v) for v in zip(*pairs, strict=True))
-    labels = encode_labels(sem, ins)
+    labels = encode(sem, ins)
     path = tmp_path_factory.mktemp("label") / "000000.label"
     write_label(path, labels)
     back = read_label(path, len(pairs))
@@ -176,7 +174,7 @@ def test_label_round_trip(tmp_path_factory: pytest.TempPathFactory, pairs: list)
 
 def test_encode_labels_rejects_ids_beyond_16_bits() -> None:
     with pytest.raises(ValueError, match="instance ids must lie in 0..65535"):
-        encode_labels(np.zeros(2), np.array([1, 70000]))
+        encode(np.zeros(2), np.array([1, 70000]))
 
 
 def test_calib_round_trip(tmp_path: Path) -> None:

@@ -247,12 +247,12 @@ def test_flic_backends_agree_on_a_real_sized_scan(small_sample):
     import dataclasses
 
     from flic_cli.config import load_config
-    from flic_cli.ground import paper_ground
+    from flic_cli.ground import PaperGround
     from flic_cli.io import open_dataset
 
     ds = open_dataset(small_sample.moosmann_log)
     frame = ds.load(ds.refs()[0])
-    ground = paper_ground(frame.image)
+    ground = PaperGround().extract(frame.image, frame.points)
     cfg = load_config()
     for name in ("flic0", "flic14"):
         method = cfg.method(name).method
@@ -409,9 +409,8 @@ def _same_labels_as_before(data: Path, methods, settings_, frames=None) -> int:
     on the pipeline's image and mask (ground and held cells left out) without the attachment of
     held cells, which the previous kernels did not have (tests/test_ground_column.py tests it);
     returns the number of comparisons."""
-    import dataclasses
-
     from flic_cli.config import load_config
+    from flic_cli.ground.base import Ground
     from flic_cli.io import open_dataset
     from flic_cli.runs.pipeline import build_segmenter, prepare
 
@@ -424,12 +423,12 @@ def _same_labels_as_before(data: Path, methods, settings_, frames=None) -> int:
             prep = prepare(ds.load(ref), setting, cfg.projection)
             for seg in segs:
                 step = seg.ground_step(prep.image, prep.points)
-                image, ground = prep.image, None
-                if step is not None:
-                    image = dataclasses.replace(step.image, attached=None)
-                    ground = step.left_out
+                image, ground, mask = prep.image, None, None
+                if step is not None:  # without the held cells' attachments
+                    image, mask = step.image, step.left_out
+                    ground = Ground.from_mask(image, mask)
                 got = seg.method.segment(image, prep.points, ground)
-                want = reference_kernels.segment(seg.method, image, ground)
+                want = reference_kernels.segment(seg.method, image, mask)
                 np.testing.assert_array_equal(got, want, err_msg=f"{seg.name} {setting} {ref}")
                 done += 1
     return done

@@ -8,6 +8,7 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
 from flic_cli.errors import FlicInputError
+from flic_cli.ground.base import Ground
 from flic_cli.methods.alpine import Alpine, box_extent, split_cluster
 from flic_cli.methods.cvc import Cvc, curved_voxels, voxel_components
 from flic_cli.methods.euclidean import Euclidean, radius_components
@@ -64,9 +65,9 @@ def test_euclidean_method_drops_small_and_ground() -> None:
     img = sensor_image(pts)
     labels = Euclidean(tolerance_m=0.5, min_size=10).segment(img, pts, None)
     assert (labels[:30] == 1).all() and (labels[30:] == 0).all()
-    ground = np.zeros((1, 35), dtype=bool)
-    ground[0, :25] = True  # leaves 5 blob points: under the minimum
-    labels = Euclidean(tolerance_m=0.5, min_size=5).segment(img, pts, ground)
+    mask = np.zeros((1, 35), dtype=bool)
+    mask[0, :25] = True  # leaves 5 blob points: under the minimum
+    labels = Euclidean(tolerance_m=0.5, min_size=5).segment(img, pts, Ground.from_mask(img, mask))
     assert (labels[:25] == 0).all() and (labels[25:30] == 1).all() and (labels[30:] == 2).all()
 
 

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 from hypothesis import given, settings
@@ -286,10 +288,16 @@ def test_projection_of_an_empty_scan_and_a_bad_keep_mask():
 def test_point_counts_without_a_stored_count():
     pts = synthetic_scan(3, 4, 300, 0.0, np.float32)
     img = project_points(pts, rows=4, width=64, mode="spherical")
-    bare = type(img)(img.ranges, img.elevation, img.point_pixel, img.projection)
-    assert bare.counts is None
-    np.testing.assert_array_equal(bare.point_counts(), img.counts)
-    assert img.counts.sum() == np.count_nonzero(img.point_pixel >= 0)
+    assert not img.every_point_has_pixel  # a spherical projection may miss points
+    bare = type(img)(
+        img.ranges, img.elevation, img.point_pixel, img.projection, every_point_has_pixel=False
+    )
+    np.testing.assert_array_equal(bare.point_counts(), img.point_counts())
+    assert img.point_counts().sum() == np.count_nonzero(img.point_pixel >= 0)
+    # a new point-to-pixel map derives its counts anew: none is carried over stale
+    some = dataclasses.replace(img, point_pixel=np.where(img.point_pixel % 2, -1, img.point_pixel))
+    want = np.bincount(some.point_pixel[some.point_pixel >= 0], minlength=img.ranges.size)
+    np.testing.assert_array_equal(some.point_counts().reshape(-1), want)
 
 
 @settings(max_examples=50, deadline=None)
@@ -310,7 +318,8 @@ def test_sensor_image_points_equal_to_points(seed, height, width, empty_share):
     again, points = from_sensor_image_with_points(ranges, elevation)
     np.testing.assert_array_equal(points, img.to_points()[img.point_pixel])
     np.testing.assert_array_equal(again.point_pixel, img.point_pixel)
-    np.testing.assert_array_equal(again.counts, img.counts)
+    np.testing.assert_array_equal(again.point_counts(), img.point_counts())
+    assert img.one_point_per_pixel and img.every_point_has_pixel
     some = rng.integers(0, height * width, 50)
     np.testing.assert_array_equal(img.pixel_points(some), img.to_points()[some])
     np.testing.assert_array_equal(img.point_counts(), (ranges > 0).astype(np.int32))
@@ -340,3 +349,38 @@ def test_segment_medians_equal_np_median(seed, lengths, distinct):
     ]
     got = _segment_medians(values.copy(), counts)
     np.testing.assert_array_equal(got, want)
+
+
+@settings(max_examples=30, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), height=st.integers(1, 8), width=st.integers(1, 300))
+def test_row_azimuth_offsets_move_every_point_of_their_row(seed, height, width):
+    """A sensor whose beams fire at azimuth offsets (Ouster's ``beam_azimuth_angles``): every
+    pixel's point lies at its column's centre plus its row's offset, in all three ways of
+    computing the points; without offsets they are the column centres."""
+    rng = np.random.default_rng(seed)
+    ranges = rng.uniform(0.5, 80.0, (height, width)).astype(np.float32)
+    ranges[rng.random((height, width)) < 0.3] = 0.0
+    elevation = np.sort(rng.uniform(-0.5, 0.1, height))[::-1]
+    offset = rng.uniform(-0.1, 0.1, height)
+    img, points = from_sensor_image_with_points(ranges, elevation, offset)
+    az = np.pi - (np.arange(width) + 0.5) * (2.0 * np.pi / width)
+    want_az = az[None, :] + offset[:, None]
+    np.testing.assert_array_equal(img.pixel_azimuth(), want_az)
+    r = ranges.astype(np.float64)
+    el = elevation[:, None]
+    want = np.stack(
+        [
+            r * np.cos(el) * np.cos(want_az),
+            r * np.cos(el) * np.sin(want_az),
+            r * np.sin(el) + 0 * r,
+        ],
+        axis=-1,
+    ).reshape(-1, 3)
+    np.testing.assert_allclose(img.to_points(), want, rtol=1e-6, atol=1e-5)
+    np.testing.assert_array_equal(points, img.to_points()[img.point_pixel])
+    np.testing.assert_array_equal(img.pixel_points(), points)
+    plain = from_sensor_image(ranges, elevation)
+    assert not plain.has_azimuth_offset and img.has_azimuth_offset
+    np.testing.assert_array_equal(plain.azimuth_offset, np.zeros(height))
+    with pytest.raises(ValueError, match="azimuth_offset"):
+        from_sensor_image(ranges, elevation, np.zeros(height + 1))

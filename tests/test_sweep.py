@@ -12,8 +12,10 @@ from typer.testing import CliRunner
 from flic_cli.cli import app
 from flic_cli.config import load_config
 from flic_cli.errors import FlicInputError
+from flic_cli.methods import KINDS
 from flic_cli.runs.evaluate import run_evaluate
-from flic_cli.runs.sweep import DEFAULT_RANGES, SWEEP_COLUMNS, sweep_values
+from flic_cli.runs.spec import EvaluateRun, Selection
+from flic_cli.runs.sweep import SWEEP_COLUMNS, sweep_values
 
 runner = CliRunner()
 
@@ -28,7 +30,8 @@ def _evaluate_at(
     override = out.parent / f"{out.name}.toml"
     override.write_text(f"[methods.{method}]\n{param} = {value!r}\n")
     cfg = load_config(override)
-    run_evaluate(data, out, [method], cfg, setting=setting, frames=frames, progress=False)
+    sel = Selection(data, frames=frames, setting=setting, config=cfg, progress=False)
+    run_evaluate(EvaluateRun(sel, out, [method]))
     return pd.read_csv(out / "per_setting.csv").iloc[0]
 
 
@@ -92,11 +95,12 @@ def test_bogoslavskyi_and_dbscan_parameters(sample_root: Path, tmp_path: Path) -
 
 
 def test_sweep_values() -> None:
-    flic = sweep_values(*DEFAULT_RANGES["flic"])
+    flic = sweep_values(*KINDS["flic"].sweep_range)
     assert flic.size == 27 and flic[0] == 0.2 and flic[-1] == 1.5
     assert np.allclose(np.diff(flic), 0.05)
-    assert sweep_values(*DEFAULT_RANGES["bogoslavskyi"]).tolist() == list(map(float, range(2, 31)))
-    assert sweep_values(*DEFAULT_RANGES["dbscan"]).size == 14
+    angles = sweep_values(*KINDS["bogoslavskyi"].sweep_range)
+    assert angles.tolist() == list(map(float, range(2, 31)))
+    assert sweep_values(*KINDS["dbscan"].sweep_range).size == 14
     for bad in ((0.5, 0.2, 0.1), (0.2, 0.5, 0.0), (0.0, 0.5, 0.1)):
         with pytest.raises(FlicInputError):
             sweep_values(*bad)

@@ -14,6 +14,7 @@ from flic_cli.cli.app import (
     SequencesOpt,
     SettingOpt,
     SkipBadOpt,
+    TopicOpt,
     _data_or_sample,
     _selection,
     app,
@@ -26,7 +27,7 @@ from flic_cli.cli.app import (
     epilog=(
         "Examples:\n\n"
         "- `flic benchmark` (the synthetic sample's Moosmann-style log, the default methods)\n\n"
-        "- `flic benchmark ~/moosmann/log1 --out bench/ --dbscan-every 25`\n\n"
+        "- `flic benchmark ~/moosmann/log1 --out bench/ --slow-every 25`\n\n"
         "- `flic benchmark ~/kitti --sequences 08 --frames 0:500 --methods flic0,flic14 "
         "--repeat 3`"
     )
@@ -79,12 +80,14 @@ def benchmark(
             "work on a shared machine do not meet every round).",
         ),
     ] = 1,
-    dbscan_every: Annotated[
+    slow_every: Annotated[
         int,
         typer.Option(
+            "--slow-every",
             "--dbscan-every",
             min=1,
-            help="Time methods of kind dbscan on every N-th frame only (seconds per frame).",
+            help="Time the methods declared slow (DBSCAN: seconds per frame) on every N-th frame "
+            "only. `--dbscan-every` is the same option.",
         ),
     ] = 10,
     threads: Annotated[
@@ -95,6 +98,7 @@ def benchmark(
         bool, typer.Option("--plots/--no-plots", help="Write runtime.png, boxplot_hz.png, ...")
     ] = True,
     skip_bad: SkipBadOpt = False,
+    topic: TopicOpt = None,
 ) -> None:
     """Time the segmentation of every frame (range image in, labels out, ground extraction
     included), single-threaded, after a warm-up, each method in a pass over the frames of its
@@ -110,25 +114,17 @@ def benchmark(
     from flic_cli.config import load_config
     from flic_cli.runs.benchmark import run_benchmark
     from flic_cli.runs.pipeline import parse_methods
+    from flic_cli.runs.spec import BenchmarkRun, Selection
 
     cfg = load_config(config)
     names = parse_methods(methods, cfg)
     seqs, frm = _selection(sequences, frames)
-    result = run_benchmark(
-        _data_or_sample(data, moosmann=True),
-        out,
-        names,
-        cfg,
-        setting=setting,
-        sequences=seqs,
-        frames=frm,
-        ground_remover=ground_remover,
-        warmup=warmup,
-        repeat=repeat,
-        rounds=rounds,
-        dbscan_every=dbscan_every,
-        threads=threads,
-        plots=plots,
+    seqs = [topic] if topic else seqs
+    sel = Selection(
+        _data_or_sample(data, moosmann=True), seqs, frm, setting, ground_remover, cfg,
         skip_bad=skip_bad,
+    )  # fmt: skip
+    result = run_benchmark(
+        BenchmarkRun(sel, out, names, warmup, repeat, rounds, slow_every, threads, plots)
     )
     typer.echo(result.report())

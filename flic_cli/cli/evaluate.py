@@ -132,41 +132,45 @@ def evaluate(
     from flic_cli.config import load_config
     from flic_cli.runs.evaluate import run_evaluate
     from flic_cli.runs.pipeline import parse_methods
+    from flic_cli.runs.spec import EvaluateRun, Selection
 
     cfg = load_config(config)
     names = parse_methods(methods, cfg)
     seqs, frm = _selection(sequences, frames)
 
+    status: list[str] = []
+
     def started(total: int, done: int, missing: int) -> None:
-        parts = [f"evaluating {total} frames"]
+        # said once the run succeeded: a run stopped by bad input prints its one error line only
+        # (the progress bar shows the frames meanwhile)
+        parts = [f"evaluated {total} frames"]
         if done:
             parts.append(f"{done} finished earlier")
         if missing:
             parts.append(f"left out {missing} frames without .label files")
-        typer.echo(", ".join(parts), err=True)
+        status.append(", ".join(parts))
 
     try:
+        sel = Selection(
+            _data_or_sample(data), seqs, frm, setting, ground_remover, cfg, jobs, skip_bad
+        )
         result = run_evaluate(
-            _data_or_sample(data),
-            out,
-            names,
-            cfg,
-            setting=setting,
-            sequences=seqs,
-            frames=frm,
-            ground_remover=ground_remover,
-            jobs=jobs,
-            scheduler=scheduler,
-            resume=resume,
-            skip_missing=skip_missing,
-            skip_bad=skip_bad,
-            on_start=started,
-            on_estimate=lambda line: typer.echo(line, err=True),
-            semantics=semantics,
-            runtimes=runtimes,
+            EvaluateRun(
+                sel,
+                out,
+                names,
+                scheduler=scheduler,
+                resume=resume,
+                skip_missing=skip_missing,
+                semantics=semantics,
+                runtimes=runtimes,
+                on_start=started,
+                on_estimate=lambda line: typer.echo(line, err=True),
+            )
         )
     except KeyboardInterrupt:
         _interrupted(out, resumable=True)
+    typer.echo("\n".join(status), err=True)
     typer.echo(result.text())
     if result.skipped:
         typer.echo(
@@ -227,27 +231,26 @@ def sweep_threshold(
     projected once for all values."""
     from flic_cli.config import load_config
     from flic_cli.runs.pipeline import resolve_method
+    from flic_cli.runs.spec import Selection, SweepRun
     from flic_cli.runs.sweep import run_sweep
 
     cfg = load_config(config)
     seqs, frm = _selection(sequences, frames)
     try:
+        sel = Selection(
+            _data_or_sample(data), seqs, frm, setting, ground_remover, cfg, jobs, skip_bad
+        )
         result = run_sweep(
-            _data_or_sample(data),
-            out,
-            resolve_method(method, mc),
-            cfg,
-            start,
-            stop,
-            step,
-            setting=setting,
-            sequences=seqs,
-            frames=frm,
-            ground_remover=ground_remover,
-            jobs=jobs,
-            scheduler=scheduler,
-            skip_missing=skip_missing,
-            skip_bad=skip_bad,
+            SweepRun(
+                sel,
+                out,
+                resolve_method(method, mc),
+                start,
+                stop,
+                step,
+                scheduler=scheduler,
+                skip_missing=skip_missing,
+            )
         )
     except KeyboardInterrupt:
         _interrupted(out, resumable=False)

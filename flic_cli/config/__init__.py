@@ -1,10 +1,10 @@
-"""Configuration, validated once at load into typed objects.
+"""Configuration, validated once at load into typed objects (what a configurable component is
+lives in :mod:`flic_cli.component`, apart, so that components do not import the parser).
 
-- :mod:`flic_cli.config.component` -- what a configurable component is (methods, ground removers,
-  the projection): a frozen, validated dataclass holding its parameters' single defaults;
 - :mod:`flic_cli.config.schema` -- :class:`Config` and :class:`MethodSpec`, what runs work with;
-- :mod:`flic_cli.config.parser` -- reading the presets (``configs/default.toml``) and the user's
-  ``--config`` file into a :class:`Config`.
+- :mod:`flic_cli.config.parser` -- reading the presets (``presets/default.toml``, shipped with the
+  package; ``configs/`` in the repository links to that folder) and the user's ``--config`` file
+  into a :class:`Config`.
 """
 
 from flic_cli.config.parser import defaults_path, load_config, parse_config

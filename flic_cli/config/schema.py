@@ -19,7 +19,7 @@ from typing import TYPE_CHECKING, Any
 
 from flic_cli.errors import FlicInputError
 
-if TYPE_CHECKING:  # the projection component itself imports flic_cli.config.component
+if TYPE_CHECKING:  # the projection component itself imports flic_cli.component
     from flic_cli.projection import Projection
 
 

@@ -1,7 +1,9 @@
 """Ground extraction: the step between the range image and the clusterer.
 
-Every remover is a component (:mod:`flic_cli.config.component`) called as ``remover(image,
-points) -> (H, W) bool`` (True = ground pixel), see :class:`flic_cli.ground.base.GroundRemover`:
+Every remover is a component (:mod:`flic_cli.component`) with one method,
+``remover.extract(image, points) -> Ground`` (:class:`flic_cli.ground.base.Ground`: the ground
+pixels, the decision per point where it makes one, the held cells and the image the clusterers
+see), see :class:`flic_cli.ground.base.GroundRemover`:
 
 - ``paper`` -- :class:`PaperGround`, the FLIC paper's tan(beta) test with the height image;
 - ``bogoslavskyi`` -- :class:`BogoslavskyiGround`, Bogoslavskyi & Stachniss' angle image,
@@ -13,13 +15,12 @@ points) -> (H, W) bool`` (True = ground pixel), see :class:`flic_cli.ground.base
 - the "No Ground" setting removes the ground classes' points by label before projection
   (:func:`flic_cli.classes.ground_mask`), so no remover runs.
 
-A remover may also decide per point (``point_ground(image, points, mask)``: ``column`` decides
-the points hidden behind their pixel's nearest point on a projected scan) and hold cells out of
-the clustering that join the cluster standing on them afterwards (``split``: ``column`` holds the
-feet of things); :func:`flic_cli.ground.base.extract_ground` runs a remover and gives the
-clusterers its decision, held cells included.
+A remover that decides per pixel returns :meth:`flic_cli.ground.base.Ground.from_mask`; ``column``
+also decides per point (the points hidden behind their pixel's nearest point on a projected scan)
+and holds cells out of the clustering that join the cluster standing on them afterwards (the feet
+of things). Every clusterer takes the :class:`~flic_cli.ground.base.Ground` as it is.
 
-To add a remover: a component class with ``__call__(image, points)``, named in
+To add a remover: a component class with ``extract(image, points) -> Ground``, named in
 :data:`flic_cli.registry.REMOVERS` under the name that ``[ground.NAME]`` config tables and
 ``--ground-remover`` use.
 """
@@ -32,7 +33,7 @@ from flic_cli.ground.base import (
     pixel_owners,
 )
 from flic_cli.ground.bogoslavskyi import BogoslavskyiGround, bogoslavskyi_ground
-from flic_cli.ground.column import ColumnGround, column_ground
+from flic_cli.ground.column import ColumnGround
 from flic_cli.ground.paper import PaperGround, paper_ground
 from flic_cli.ground.patchworkpp import PatchworkppGround
 from flic_cli.registry import REMOVERS as _REMOVERS
@@ -50,7 +51,6 @@ __all__ = [
     "PaperGround",
     "PatchworkppGround",
     "bogoslavskyi_ground",
-    "column_ground",
     "extract_ground",
     "paper_ground",
     "pixel_mask",

@@ -15,30 +15,16 @@ from flic_cli.range_image import RangeImage
 
 
 class GroundRemover(Protocol):
-    """A ground remover: a component (see :mod:`flic_cli.config.component`) called on a range
-    image and the scan's points; returns the (H, W) bool mask of its ground pixels (empty pixels
-    are never ground).
+    """A ground remover: a component (see :mod:`flic_cli.component`) whose one method
+    ``extract(image, points) -> Ground`` decides the ground of a scan (:class:`Ground`).
 
     ``points`` are the (N, 3) points of the evaluated point set, point i in pixel
-    ``image.point_pixel[i]``; removers that work on the image alone ignore them.
-
-    A remover may also decide per point (``point_ground(image, points, mask) -> (on_ground,
-    clustered)``, or None for its pixels' decision): where a pixel holds several points (a
-    projected scan), those behind the nearest one need not share its decision. ``on_ground`` is
-    the (N,) bool decision, ``clustered`` the image the clusterers see: ``image`` with the points
-    taken as ground whose pixel is not ground left out of their pixels (:func:`leave_pixels`
-    makes it from a decision; a remover may make both in one pass). Without that method every
-    point takes its pixel's decision (:func:`point_ground`); see :func:`extract_ground`.
-
-    And a remover may hold cells out of the clustering that it cannot decide on its own
-    (``split(image, points) -> (mask, held, attached)``: ``held`` (H, W) bool and ``attached``,
-    the cell standing on each, :attr:`flic_cli.range_image.RangeImage.attached`; or None, None):
-    the cells under the foot of something standing on the ground, which belong to that thing or
-    to the ground. Clustered, they join neighbouring objects to each other along the ground; held
-    out, their points take the cluster of the cell standing on them.
+    ``image.point_pixel[i]``; removers that work on the image alone ignore them. A remover that
+    decides per pixel only returns :meth:`Ground.from_mask`; one that decides per point, or holds
+    cells out of the clustering, fills the rest of :class:`Ground`.
     """
 
-    def __call__(self, image: RangeImage, points: np.ndarray) -> np.ndarray: ...
+    def extract(self, image: RangeImage, points: np.ndarray | None) -> Ground: ...
 
 
 @dataclasses.dataclass(frozen=True)
@@ -47,22 +33,40 @@ class Ground:
 
     Attributes
     ----------
-    mask : (H, W) bool, the ground pixels.
+    mask : (H, W) bool, the ground pixels (empty pixels are never ground).
     image : the range image the clusterers see: the scan's image, except that the points taken
         as ground whose pixel is not ground have left their pixel (``point_pixel`` -1, not in
-        the pixel's point count), so that no clusterer counts or labels them, and that it names
-        the cell standing on every held cell (``attached``).
+        the pixel's point count, :func:`leave_pixels`), so that no clusterer counts or labels
+        them.
     decided : (N,) bool, the remover's own decision per point, or None where every point takes
-        its pixel's.
+        its pixel's. Where a pixel holds several points (a projected scan), those behind the
+        nearest one need not share its decision.
     held : (H, W) bool, the cells held out of the clustering (not ground, never ground
-        pixels), whose points take the cluster of the cell standing on them (``image.attached``);
-        None: none.
+        pixels), or None: none. They are the cells a remover cannot decide on its own (the
+        cells under the foot of something standing on the ground, which belong to that thing
+        or to the ground): clustered, they would join neighbouring objects to each other along
+        the ground; held out, their points take the cluster of the cell standing on them.
+    attached : (K, 3) int64, one row per held cell: its flat pixel index, the flat pixel index
+        of the cell standing on it whose cluster its points take (-1: none), and its number of
+        points in ``image`` (they count towards that cluster's minimum size); None with
+        ``held``.
     """
 
     mask: np.ndarray
     image: RangeImage
     decided: np.ndarray | None = None
     held: np.ndarray | None = None
+    attached: np.ndarray | None = None
+
+    def __post_init__(self) -> None:
+        if (self.held is None) != (self.attached is None):
+            raise ValueError("a Ground has both held cells and their attachments, or neither")
+
+    @classmethod
+    def from_mask(cls, image: RangeImage, mask: np.ndarray) -> Ground:
+        """The decision of a remover that decides per pixel only: every point takes its
+        pixel's decision, the clusterers see ``image`` itself, nothing is held."""
+        return cls(np.asarray(mask, dtype=bool), image)
 
     @functools.cached_property
     def left_out(self) -> np.ndarray:
@@ -99,22 +103,8 @@ def point_ground(image: RangeImage, ground: np.ndarray) -> np.ndarray:
 
 
 def extract_ground(remover: GroundRemover, image: RangeImage, points: np.ndarray) -> Ground:
-    """Run ``remover`` on a scan: its pixel mask, its per-point decision, its held cells and the
-    image the clusterers see (:class:`Ground`)."""
-    split = getattr(remover, "split", None)
-    if split is None:
-        mask, held, attached = remover(image, points), None, None
-    else:
-        mask, held, attached = split(image, points)
-    decide = getattr(remover, "point_ground", None)
-    per_point = None if decide is None else decide(image, points, mask)
-    decided, clustered = (None, image) if per_point is None else per_point
-    if attached is not None and len(attached):
-        if clustered is not image:  # points of held pixels that left them do not count
-            attached = attached.copy()
-            attached[:, 2] = clustered.counts.reshape(-1)[attached[:, 0]]
-        clustered = dataclasses.replace(clustered, attached=attached)
-    return Ground(mask, clustered, decided, held)
+    """``remover.extract(image, points)``: its decision on a scan (:class:`Ground`)."""
+    return remover.extract(image, points)
 
 
 def leave_pixels(image: RangeImage, mask: np.ndarray, on_ground: np.ndarray) -> RangeImage:
@@ -145,7 +135,10 @@ def points_left(
     (``moved`` False)."""
     if not moved:
         return image
-    return dataclasses.replace(image, point_pixel=point_pixel, counts=counts.reshape(image.shape))
+    return dataclasses.replace(
+        image, point_pixel=point_pixel, counts=counts.reshape(image.shape),
+        every_point_has_pixel=False,
+    )  # fmt: skip
 
 
 def per_sensor(

@@ -45,8 +45,8 @@ from pydantic import Field
 from pydantic.dataclasses import dataclass
 from scipy.signal import savgol_coeffs
 
-from flic_cli.config.component import STRICT
-from flic_cli.ground.base import per_sensor
+from flic_cli.component import STRICT
+from flic_cli.ground.base import Ground, per_sensor
 from flic_cli.range_image import RangeImage
 
 #: Their seeds: a column's lowest pixel starts the growth only below this angle (hard-coded).
@@ -236,9 +236,11 @@ class BogoslavskyiGround:
     window: Literal[5, 7, 9, 11] = 5
     start_angle_deg: Annotated[float, Field(gt=0, lt=90, description="degrees")] = START_ANGLE_DEG
 
-    def __call__(self, image: RangeImage, points: np.ndarray | None = None) -> np.ndarray:
-        """(H, W) bool ground mask of ``image`` (see :func:`bogoslavskyi_ground`)."""
-        return bogoslavskyi_ground(image, self.angle_deg, self.window, self.start_angle_deg)
+    def extract(self, image: RangeImage, points: np.ndarray | None = None) -> Ground:
+        """The ground pixels of ``image`` (:func:`bogoslavskyi_ground`); every point takes its
+        pixel's decision."""
+        mask = bogoslavskyi_ground(image, self.angle_deg, self.window, self.start_angle_deg)
+        return Ground.from_mask(image, mask)
 
 
 def bogoslavskyi_ground(

@@ -80,7 +80,7 @@ sensor's own image.
    points, and cars at the minimum size fall under it. So they are *held*: the clusterers leave
    them out, and their points take the cluster of the cell standing on them (the one the foot
    test read) if it is within ``attach_m`` of it and not ground, and count towards its minimum
-   size (:attr:`flic_cli.range_image.RangeImage.attached`); a held cell under a held cell takes
+   size (:attr:`flic_cli.ground.base.Ground.attached`); a held cell under a held cell takes
    what that one takes. No held cell links anything. The kernel lists the held cells as step 6
    finds them; the ground decision and the metrics count them as not ground.
 
@@ -104,8 +104,8 @@ from pydantic import Field
 from pydantic.dataclasses import dataclass
 
 from flic_cli.bitwords import pack, trailing_zeros
-from flic_cli.config.component import STRICT
-from flic_cli.ground.base import per_sensor, points_left
+from flic_cli.component import STRICT
+from flic_cli.ground.base import Ground, per_sensor, points_left
 from flic_cli.range_image import RangeImage
 
 # Fixed constants of the algorithm (see the module docstring), with the values the sweep chose.
@@ -522,7 +522,7 @@ def _attached(
     native: bool,
     w: int,
 ) -> np.ndarray:
-    """Step 8's (K, 3) table (:attr:`flic_cli.range_image.RangeImage.attached`) from the
+    """Step 8's (K, 3) table (:attr:`flic_cli.ground.base.Ground.attached`) from the
     kernel's held cells and their standers (rows from the bottom): a stander that is ground gives
     none; a held cell standing on a held cell takes that one's target. Walked backwards, the rows
     come top down, so the target of a held stander (the last held cell seen in its column:
@@ -644,38 +644,25 @@ def _cell_inputs(image: RangeImage, exact: bool) -> tuple:
 
 
 @functools.lru_cache(maxsize=64)
-def _param_vector(
-    sensor_height_m: float,
-    noise_m: float,
-    slope_change_deg: float,
-    kerb_m: float,
-    max_step_m: float,
-    flat_deg: float,
-    seed_tolerance_m: float,
-    base_band_m: float,
-    neighbour_px: int,
-    neighbour_band_m: float,
-    foot_deg: float,
-    under_m: float,
-    attach_m: float,
-    face_deg: float,
-) -> np.ndarray:
-    """The parameters in the ``_P_*`` layout of :func:`_column_ground` (cached per setting)."""
+def _param_vector(remover: ColumnGround) -> np.ndarray:
+    """The parameters of ``remover`` in the ``_P_*`` layout of :func:`_column_ground`, angles as
+    tangents (cached per setting)."""
+    r = remover
     p = np.zeros(_P_LEN)
-    p[_P_SENSOR] = sensor_height_m
-    p[_P_NOISE] = noise_m
-    p[_P_TAN_CHANGE] = np.tan(np.radians(slope_change_deg))
-    p[_P_KERB] = kerb_m
-    p[_P_MAX_STEP] = max_step_m
-    p[_P_TAN_FLAT] = np.tan(np.radians(flat_deg))
-    p[_P_SEED_TOL] = seed_tolerance_m
-    p[_P_BASE_BAND] = base_band_m
-    p[_P_NB_PX] = neighbour_px
-    p[_P_NB_BAND] = neighbour_band_m
-    p[_P_TAN_FOOT] = np.tan(np.radians(foot_deg))
-    p[_P_UNDER] = under_m
-    p[_P_ATTACH_SQ] = attach_m**2
-    p[_P_TAN_FACE] = np.tan(np.radians(face_deg)) if face_deg < 90.0 else np.inf
+    p[_P_SENSOR] = r.sensor_height_m
+    p[_P_NOISE] = r.noise_m
+    p[_P_TAN_CHANGE] = np.tan(np.radians(r.slope_change_deg))
+    p[_P_KERB] = r.kerb_m
+    p[_P_MAX_STEP] = r.max_step_m
+    p[_P_TAN_FLAT] = np.tan(np.radians(r.flat_deg))
+    p[_P_SEED_TOL] = r.seed_tolerance_m
+    p[_P_BASE_BAND] = r.base_band_m
+    p[_P_NB_PX] = r.neighbour_px
+    p[_P_NB_BAND] = r.neighbour_band_m
+    p[_P_TAN_FOOT] = np.tan(np.radians(r.foot_deg))
+    p[_P_UNDER] = r.under_m
+    p[_P_ATTACH_SQ] = r.attach_m**2
+    p[_P_TAN_FACE] = np.tan(np.radians(r.face_deg)) if r.face_deg < 90.0 else np.inf
     p.setflags(write=False)
     return p
 
@@ -729,55 +716,49 @@ class ColumnGround:
     hold_feet: bool = True
     attach_m: Annotated[float, Field(gt=0, description="metres")] = 1.5
 
-    def __call__(self, image: RangeImage, points: np.ndarray | None = None) -> np.ndarray:
-        """(H, W) bool ground mask of ``image`` (see :func:`column_ground`)."""
-        return self.split(image, points)[0]
+    def extract(self, image: RangeImage, points: np.ndarray | None = None) -> Ground:
+        """The remover's decision on a scan (module docstring): the ground mask (steps 1-6),
+        by step 7 the decision per point and the image the clusterers see without the points it
+        takes, by step 8 the held cells and the cell standing on each, with their points counted
+        in that image.
 
-    def split(
-        self, image: RangeImage, points: np.ndarray | None = None
-    ) -> tuple[np.ndarray, np.ndarray | None, np.ndarray | None]:
-        """The ground mask of ``image`` (H, W) bool, and by step 8 its held cells (H, W) bool
-        and the cell standing on each, (K, 3) (:attr:`flic_cli.range_image.RangeImage.
-        attached`); None and None without step 8."""
-        params = _param_vector(
-            float(self.sensor_height_m),
-            float(self.noise_m),
-            float(self.slope_change_deg),
-            float(self.kerb_m),
-            float(self.max_step_m),
-            float(self.flat_deg),
-            float(self.seed_tolerance_m),
-            float(self.base_band_m),
-            int(self.neighbour_px),
-            float(self.neighbour_band_m),
-            float(self.foot_deg),
-            float(self.under_m),
-            float(self.attach_m),
-            float(self.face_deg),
-        )
+        Parameters
+        ----------
+        image : the scan's range image.
+        points : (N, 3) the scan's points, pixel ``image.point_pixel[i]`` for point i; read by
+            step 7 only (a projected scan), None elsewhere.
+        """
         mask, held, cells, standers = _column_ground(
-            *pixel_geometry(image, self.point_heights), params
+            *pixel_geometry(image, self.point_heights), _param_vector(self)
         )
+        decided, clustered = None, image
+        per_point = self.point_ground(image, points, mask)
+        if per_point is not None:
+            decided, clustered = per_point
         if not self.hold_feet:
-            return mask, None, None
-        native = image.projection == "native"  # one point per valid pixel: no counts to read
-        counts = _ONE if native else np.ascontiguousarray(image.point_counts(), dtype=np.int32)
+            return Ground(mask, clustered, decided)
+        # the held cells' points as the clusterers see them (step 7 may have taken some)
+        native = clustered.one_point_per_pixel  # no counts to read
+        counts = _ONE if native else np.ascontiguousarray(clustered.point_counts(), dtype=np.int32)
         attached = _attached(
             cells, standers, mask.reshape(-1), held.reshape(-1), counts.reshape(-1), native,
             image.shape[1],
         )  # fmt: skip
-        return mask, held, attached
+        return Ground(mask, clustered, decided, held, attached)
 
     def point_ground(
-        self, image: RangeImage, points: np.ndarray, mask: np.ndarray
+        self, image: RangeImage, points: np.ndarray | None, mask: np.ndarray
     ) -> tuple[np.ndarray, RangeImage] | None:
         """(N,) bool ground points: those of ground pixels, and by step 7 (module docstring)
         the points hidden behind their pixel's nearest point where that pixel is not ground;
         and the image the clusterers see, without the points step 7 takes (made in the same
         pass; :func:`flic_cli.ground.base.leave_pixels`). None (every point takes its pixel's
-        decision) without step 7 or on a sensor's own image, which has no hidden points."""
-        if not self.hidden_points or image.projection == "native":
+        decision) without step 7 or on a sensor's own image, which has no hidden points.
+        A step of :meth:`extract`, given ``mask``, the ground pixels."""
+        if not self.hidden_points or image.one_point_per_pixel:
             return None
+        if points is None:
+            raise ValueError("step 7 (hidden_points) decides per point: it needs the points")
         on_ground, pix, counts, moved = _points_ground(
             *_cell_inputs(image, self.point_heights),
             np.ascontiguousarray(mask, dtype=np.bool_),
@@ -788,80 +769,3 @@ class ColumnGround:
             float(self.neighbour_band_m),
         )
         return on_ground, points_left(image, pix, counts, moved)
-
-
-def column_ground(
-    image: RangeImage,
-    sensor_height_m: float = ColumnGround.sensor_height_m,
-    noise_m: float = ColumnGround.noise_m,
-    slope_change_deg: float = ColumnGround.slope_change_deg,
-    kerb_m: float = ColumnGround.kerb_m,
-    max_step_m: float = ColumnGround.max_step_m,
-    flat_deg: float = ColumnGround.flat_deg,
-    seed_tolerance_m: float = ColumnGround.seed_tolerance_m,
-    base_band_m: float = ColumnGround.base_band_m,
-    neighbour_px: int = ColumnGround.neighbour_px,
-    neighbour_band_m: float = ColumnGround.neighbour_band_m,
-    foot_deg: float = ColumnGround.foot_deg,
-    under_m: float = ColumnGround.under_m,
-    face_deg: float = ColumnGround.face_deg,
-    point_heights: bool = ColumnGround.point_heights,
-    held: np.ndarray | None = None,
-) -> np.ndarray:
-    """Ground pixels by column-wise ground tracking (see the module docstring).
-
-    Parameters
-    ----------
-    image : the range image.
-    sensor_height_m : sensor above the road, metres (where columns start their ground).
-    noise_m : height noise of the ground between neighbouring cells, metres.
-    slope_change_deg : how fast the ground may bend, degrees per metre of ``dr``.
-    kerb_m : largest step up onto a surface that continues flat (a kerb), metres.
-    max_step_m : largest step up after a gap, metres (protects roofs, hoods, benches).
-    flat_deg : largest deviation from the ground's gradient of the surface that confirms a step
-        or a seed, degrees.
-    seed_tolerance_m : a column's first ground cell lies within this of the road height (plus
-        2 deg of slope times its range), metres.
-    base_band_m : cells this close to the ground model just beyond it are ground, metres.
-    neighbour_px : how far (columns) a row neighbour taken by the column steps may be; 0 turns
-        step 6 off.
-    neighbour_band_m : largest height difference to that row neighbour, metres.
-    foot_deg : a cell whose next cell above rises from it more steeply than this is the foot of
-        something standing on it and stays, degrees.
-    under_m : a cell whose next cell above is nearer by 0.3 m to this is ground under a car's
-        body (labelled as the car) and stays, metres.
-    face_deg : a cell that rises more steeply than this from its next cell below, when that one
-        is not ground, lies on the face of an object (a car's side, a hedge, a fence) and stays,
-        degrees; 90 turns the test off.
-    point_heights : on a projected scan, every pixel at its nearest point's height rather than
-        at its range along its row's elevation (:func:`pixel_geometry`); a sensor's own image
-        has only the latter.
-    held : (H, W) bool array or None; if given, it is filled with the held cells: those step 6
-        would take but for the foot and under test (stood on by something within ``foot_deg``
-        or ``under_m``), which :class:`ColumnGround` holds out of the clustering.
-
-    Returns
-    -------
-    (H, W) bool, True = ground. Empty pixels are never ground.
-    """
-    geometry = pixel_geometry(image, point_heights)
-    params = _param_vector(
-        float(sensor_height_m),
-        float(noise_m),
-        float(slope_change_deg),
-        float(kerb_m),
-        float(max_step_m),
-        float(flat_deg),
-        float(seed_tolerance_m),
-        float(base_band_m),
-        int(neighbour_px),
-        float(neighbour_band_m),
-        float(foot_deg),
-        float(under_m),
-        float(ColumnGround.attach_m),
-        float(face_deg),
-    )
-    mask, stood, _, _ = _column_ground(*geometry, params)
-    if held is not None:
-        held[...] = stood
-    return mask

@@ -9,8 +9,8 @@ from numba import njit
 from pydantic import Field
 from pydantic.dataclasses import dataclass
 
-from flic_cli.config.component import STRICT
-from flic_cli.ground.base import per_sensor
+from flic_cli.component import STRICT
+from flic_cli.ground.base import Ground, per_sensor
 from flic_cli.range_image import RangeImage
 
 
@@ -101,9 +101,11 @@ class PaperGround:
     height_slope_deg: Annotated[float, Field(ge=0, lt=90, description="degrees")] = 10.0
     sensor_height_m: Annotated[float, Field(gt=0, description="metres")] = 1.73
 
-    def __call__(self, image: RangeImage, points: np.ndarray | None = None) -> np.ndarray:
-        """(H, W) bool ground mask of ``image`` (see :func:`paper_ground`)."""
-        return paper_ground(image, self.max_slope_deg, self.sensor_height_m, self.height_slope_deg)
+    def extract(self, image: RangeImage, points: np.ndarray | None = None) -> Ground:
+        """The ground pixels of ``image`` (:func:`paper_ground`); every point takes its pixel's
+        decision."""
+        mask = paper_ground(image, self.max_slope_deg, self.sensor_height_m, self.height_slope_deg)
+        return Ground.from_mask(image, mask)
 
 
 def paper_ground(

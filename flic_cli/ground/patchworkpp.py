@@ -18,9 +18,9 @@ import numpy as np
 from pydantic import Field
 from pydantic.dataclasses import dataclass
 
-from flic_cli.config.component import STRICT
+from flic_cli.component import STRICT
 from flic_cli.errors import FlicInputError
-from flic_cli.ground.base import pixel_mask
+from flic_cli.ground.base import Ground, pixel_mask
 from flic_cli.range_image import RangeImage
 
 #: What to install when the extra is missing.
@@ -117,9 +117,11 @@ class PatchworkppGround:
         """Fail with the install hint when ``pypatchworkpp`` is missing (before the first frame)."""
         _module()
 
-    def __call__(self, image: RangeImage, points: np.ndarray) -> np.ndarray:
-        """(H, W) bool ground mask: each pixel takes the decision of the point that owns it."""
+    def extract(self, image: RangeImage, points: np.ndarray) -> Ground:
+        """The ground pixels: each pixel takes the decision of the point that owns it, and every
+        point takes its pixel's (as the clusterers see them: Patchwork++'s own decision on the
+        points hidden behind a pixel's nearest point is not used)."""
         ground = patchworkpp_points(
             points, self.sensor_height_m, self.min_range_m, self.max_range_m
         )
-        return pixel_mask(image, points, ground)
+        return Ground.from_mask(image, pixel_mask(image, points, ground))

@@ -1,86 +1,85 @@
 """Reading and writing the data formats: SemanticKITTI, Moosmann logs, predictions.
 
-:func:`open_dataset` recognises the format of a folder and returns a :class:`Dataset`;
-:func:`parse_frames` and :func:`parse_sequences` turn command-line selections into its arguments.
+:func:`open_dataset` recognises the format of a folder among those of
+:data:`flic_cli.registry.FORMATS` and returns a :class:`Dataset`; :func:`parse_frames` and
+:func:`parse_sequences` turn command-line selections into its arguments. No format module is
+imported before it is needed: the formats' own functions (``read_bin``, ``read_img_cfg``, ...)
+are importable from here and load their module on first use.
 """
 
 from __future__ import annotations
 
+import importlib
 import re
 from pathlib import Path
+from typing import Any
 
+from flic_cli import registry
 from flic_cli.errors import FlicInputError
 from flic_cli.io.atomic import atomic_write, atomic_write_bytes
 from flic_cli.io.base import Dataset, Frame, FrameRef
-from flic_cli.io.moosmann import (
-    ImgCfg,
-    MoosmannDataset,
-    read_img_cfg,
-    read_png_range,
-    write_img_cfg,
-    write_png_range,
-)
-from flic_cli.io.semantickitti import (
-    Scan,
-    SemanticKittiDataset,
-    encode_labels,
-    instance,
-    predictions_path,
-    read_bin,
-    read_calib,
-    read_label,
-    read_poses,
-    read_predictions,
-    read_scan,
-    semantic,
-    write_bin,
-    write_calib,
-    write_label,
-    write_poses,
-    write_predictions,
-    write_times,
-)
-from flic_cli.registry import FORMATS as _FORMATS
-from flic_cli.registry import load_all
 
-#: Dataset format classes by name (from :data:`flic_cli.registry.FORMATS`), tried in this order.
-FORMATS: dict[str, type] = load_all(_FORMATS)
+#: What ``from flic_cli.io import NAME`` gives for the formats' own functions, imported from the
+#: format's module on first use only (so ``import flic_cli.io`` imports no format).
+_LAZY: dict[str, str] = {
+    **dict.fromkeys(
+        ("ImgCfg", "MoosmannDataset", "read_img_cfg", "read_png_range", "write_img_cfg",
+         "write_png_range"),
+        "flic_cli.io.moosmann",
+    ),
+    **dict.fromkeys(
+        ("Scan", "SemanticKittiDataset", "predictions_path", "read_bin", "read_calib",
+         "read_label", "read_poses", "read_predictions", "read_scan", "write_bin", "write_calib",
+         "write_label", "write_poses", "write_predictions", "write_times"),
+        "flic_cli.io.semantickitti",
+    ),
+}  # fmt: skip
 
 __all__ = [
-    "FORMATS",
     "Dataset",
     "Frame",
     "FrameRef",
-    "ImgCfg",
-    "MoosmannDataset",
-    "Scan",
-    "SemanticKittiDataset",
     "atomic_write",
     "atomic_write_bytes",
-    "encode_labels",
-    "instance",
+    "format_class",
     "open_dataset",
     "parse_frames",
     "parse_sequences",
-    "predictions_path",
-    "read_bin",
-    "read_calib",
-    "read_img_cfg",
-    "read_label",
-    "read_png_range",
-    "read_poses",
-    "read_predictions",
-    "read_scan",
-    "semantic",
-    "write_bin",
-    "write_calib",
-    "write_img_cfg",
-    "write_label",
-    "write_png_range",
-    "write_poses",
-    "write_predictions",
-    "write_times",
+    *_LAZY,
 ]
+
+
+def __getattr__(name: str) -> Any:
+    """A format's function or class, imported from its module on first use (see :data:`_LAZY`)."""
+    if name in _LAZY:
+        return getattr(importlib.import_module(_LAZY[name]), name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_LAZY))
+
+
+def format_class(name: str) -> type:
+    """The dataset class of registered format ``name``, its optional package checked first.
+
+    Raises
+    ------
+    FlicInputError
+        When the format is unknown, or needs an optional package that is missing (with the
+        install hint).
+    """
+    entry = registry.FORMATS.get(name)
+    if entry is None:
+        raise FlicInputError(
+            None, f"unknown data format {name!r} (known: {', '.join(registry.FORMATS)})"
+        )
+    registry.check_installed(f"data format {name!r}", entry)
+    cls = registry.load(entry)
+    check = getattr(cls, "check_installed", None)
+    if check is not None:
+        check()
+    return cls
 
 
 def open_dataset(
@@ -107,10 +106,17 @@ def open_dataset(
     path = Path(path)
     if not path.exists():
         raise FlicInputError(path, "does not exist")
-    for cls in FORMATS.values():
+    unavailable = []
+    for name, entry in registry.FORMATS.items():
+        if entry.missing() is not None:  # cannot be told apart without its package
+            unavailable.append(f"{name} {entry.missing()}")
+            continue
+        cls = format_class(name)
         if cls.detect(path):
             return cls(path, sequences, frames, require_labels)
-    raise FlicInputError(path, "is none of: " + "; ".join(e.summary for e in _FORMATS.values()))
+    known = "; ".join(e.summary for e in registry.FORMATS.values() if e.missing() is None)
+    more = f" (not tried: {'; '.join(unavailable)})" if unavailable else ""
+    raise FlicInputError(path, f"is none of: {known}{more}")
 
 
 _FRAMES = re.compile(r"([0-9]*):([0-9]*)|([0-9]+)")

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import io
 import re
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -17,15 +18,17 @@ from PIL import Image, UnidentifiedImageError
 
 from flic_cli.errors import FlicInputError
 from flic_cli.io.atomic import atomic_write, atomic_write_bytes, read_bytes, read_text
-from flic_cli.io.base import Frame, FrameRef, select_sequences
-from flic_cli.io.semantickitti import frames_text, in_frames
+from flic_cli.io.base import Frame, FrameRef, frames_text, in_frames, select_sequences
 from flic_cli.range_image import RangeImage, from_sensor_image_with_points
 
 FORMAT = "moosmann"
 RANGE_SCALE = 500.0
 """PNG pixel value per metre (1 unit = 2 mm)."""
+_PNG_MAX = int(np.iinfo(np.uint16).max)
+"""Largest value of a 16-bit PNG pixel."""
 
-_SCAN_NAME = re.compile(r"scan(\d+)\.png")
+_SCAN_NAME = re.compile(r"scan([0-9]+)\.png")  # ASCII digits only (not \d: other scripts' digits)
+_NOT_ASCII = "left out: frame numbers are written in the digits 0-9"
 _PNG_COLOUR_TYPES = {
     0: "greyscale",
     2: "RGB",
@@ -84,6 +87,8 @@ def read_img_cfg(path: str | Path) -> ImgCfg:
             values.append(float(field))
         except ValueError:
             raise FlicInputError(path, f"field {i} {field!r} is not a number") from None
+        if not np.isfinite(values[-1]):
+            raise FlicInputError(path, f"field {i} {field!r} is not a finite number")
     for name, v in (("width", values[0]), ("height", values[1])):
         if v != int(v) or v < 1:
             raise FlicInputError(path, f"image {name} {v:g} is not a positive integer")
@@ -189,7 +194,7 @@ def write_png_range(path: str | Path, ranges_m: np.ndarray) -> None:
     """
     r = np.asarray(ranges_m, dtype=np.float64)
     r = np.where(np.isfinite(r) & (r > 0), r, 0.0)
-    pixels = np.clip(np.rint(r * RANGE_SCALE), 0, 65535).astype("<u2")
+    pixels = np.clip(np.rint(r * RANGE_SCALE), 0, _PNG_MAX).astype("<u2")
     with atomic_write(path) as tmp:
         Image.fromarray(pixels).save(tmp, format="PNG")
 
@@ -263,7 +268,7 @@ def write_label_image(path: str | Path, labels: np.ndarray) -> Path:
     lab = np.asarray(labels)
     if lab.ndim != 2 or not np.issubdtype(lab.dtype, np.integer):
         raise ValueError(f"labels must be a 2-D integer array, got {lab.dtype} {lab.shape}")
-    if lab.size and (lab.min() < 0 or lab.max() > 0xFFFF):
+    if lab.size and (lab.min() < 0 or lab.max() > _PNG_MAX):
         raise ValueError(
             f"cluster ids must lie in 0..65535 to fit a 16-bit PNG, got {lab.min()}..{lab.max()}"
         )
@@ -299,12 +304,27 @@ def read_label_image(path: str | Path, cfg: ImgCfg) -> np.ndarray:
 
 
 def _scan_frames(folder: Path) -> dict[int, Path]:
-    """``scanNNNNN.png`` files of a folder by frame number."""
-    out = {}
-    for p in folder.glob("scan*.png"):
+    """``scanNNNNN.png`` files of a folder by frame number (ASCII digits; other names are not
+    frames).
+
+    Raises
+    ------
+    FlicInputError
+        When two files name the same frame number (``scan0001.png`` and ``scan00001.png``): the
+        frame would be counted twice and its predictions overwritten.
+    """
+    out: dict[int, Path] = {}
+    for p in sorted(folder.glob("scan*.png")):
         m = _SCAN_NAME.fullmatch(p.name)
+        if m is None and re.fullmatch(r"scan\d+\.png", p.name):
+            warnings.warn(f"{p}: {_NOT_ASCII}", stacklevel=2)
         if m:
-            out[int(m.group(1))] = p
+            frame = int(m.group(1))
+            if frame in out:
+                raise FlicInputError(
+                    p, f"names frame {frame} like {out[frame].name}: keep one of the two files"
+                )
+            out[frame] = p
     return dict(sorted(out.items()))
 
 
@@ -314,6 +334,12 @@ def _log_layout(folder: Path) -> tuple[Path, Path] | None:
     A log holds ``scan*.png`` directly or in ``range/``, and an ``img.cfg`` beside the PNGs or in
     the folder above them. A folder with ``img.cfg`` but no scans is a log without frames.
     """
+    if _scan_frames(folder) and _scan_frames(folder / "range"):
+        raise FlicInputError(
+            folder,
+            "holds scan*.png range images both directly and in range/: which are the log's is "
+            "unclear, keep them in one of the two folders",
+        )
     for scans in (folder, folder / "range"):
         if _scan_frames(scans):
             for cfg in (scans / "img.cfg", scans.parent / "img.cfg"):
@@ -366,6 +392,7 @@ class MoosmannDataset:
     """
 
     format = FORMAT
+    point_semantics = False
     detect = staticmethod(is_moosmann)
 
     def __init__(
@@ -412,6 +439,11 @@ class MoosmannDataset:
     def refs(self) -> list[FrameRef]:
         """Every selected frame, ordered by log then frame number."""
         return list(self._refs)
+
+    @staticmethod
+    def labelled() -> bool:
+        """False: a Moosmann log has no ground-truth labels."""
+        return False
 
     def folders(self) -> list[Path]:
         """The folders of the selected logs (outputs must not go inside them)."""

@@ -18,9 +18,11 @@ import numpy as np
 from numba import njit
 
 from flic_cli.errors import FlicInputError
-from flic_cli.io.atomic import atomic_write_bytes, read_text
-from flic_cli.io.base import Frame, FrameRef, select_sequences
+from flic_cli.io.atomic import atomic_write_bytes, open_regular, read_text
+from flic_cli.io.base import Frame, FrameRef, frames_text, in_frames, select_sequences
+from flic_cli.labels import encode, instance, semantic
 from flic_cli.range_image import RangeImage
+from flic_cli.semantics import combine, known_classes
 
 FORMAT = "semantickitti"
 
@@ -64,7 +66,7 @@ def _read_array(path: str | Path, dtype: str, record: int, what: str) -> np.ndar
         When the file is missing or unreadable, or its size is not a multiple of ``record``.
     """
     try:
-        with open(path, "rb", buffering=0) as f:
+        with open_regular(path) as f:
             size = os.fstat(f.fileno()).st_size
             if size % record:
                 raise FlicInputError(
@@ -188,37 +190,6 @@ def read_scan(bin_path: str | Path, label_path: str | Path | None = None) -> Sca
     return Scan(points[keep], remission[keep], None if labels is None else labels[keep], keep)
 
 
-def semantic(labels: np.ndarray) -> np.ndarray:
-    """Semantic class ids (low 16 bits) of encoded labels."""
-    return np.asarray(labels, dtype=np.uint32) & 0xFFFF
-
-
-def instance(labels: np.ndarray) -> np.ndarray:
-    """Instance ids (high 16 bits) of encoded labels; 0 = none."""
-    return np.asarray(labels, dtype=np.uint32) >> 16
-
-
-def encode_labels(semantic_ids: np.ndarray, instance_ids: np.ndarray) -> np.ndarray:
-    """Encode semantic and instance ids as SemanticKITTI labels.
-
-    Parameters
-    ----------
-    semantic_ids, instance_ids : (N,) integer arrays with values in ``0..65535``.
-
-    Returns
-    -------
-    (N,) uint32 array ``instance << 16 | semantic``.
-    """
-    sem = np.asarray(semantic_ids, dtype=np.int64)
-    ins = np.asarray(instance_ids, dtype=np.int64)
-    for name, ids in (("semantic", sem), ("instance", ins)):
-        if ids.size and (ids.min() < 0 or ids.max() > 0xFFFF):
-            raise ValueError(
-                f"{name} ids must lie in 0..65535 to fit 16 bits, got {ids.min()}..{ids.max()}"
-            )
-    return ((ins << 16) | sem).astype(np.uint32)
-
-
 def write_bin(path: str | Path, points: np.ndarray) -> None:
     """Write a ``.bin`` scan atomically.
 
@@ -237,7 +208,8 @@ def write_bin(path: str | Path, points: np.ndarray) -> None:
 
 
 def write_label(path: str | Path, labels: np.ndarray) -> None:
-    """Write (N,) encoded uint32 labels (:func:`encode_labels`) as a ``.label`` file atomically."""
+    """Write (N,) encoded uint32 labels (:func:`flic_cli.labels.encode`) as a ``.label`` file
+    atomically."""
     atomic_write_bytes(path, np.asarray(labels, dtype="<u4").tobytes())
 
 
@@ -368,7 +340,7 @@ def write_predictions(
     semantics : (N,) raw SemanticKITTI class ids in ``0..65535``, written to the lower 16 bits;
         None (default) writes class 0 (unlabeled) for every point. To write a panoptic
         prediction (semantics, and instance ids that semantic-kitti-api scores as intended), use
-        :func:`flic_cli.semantics.write_semantic_predictions`.
+        :func:`write_semantic_predictions`.
 
     Returns
     -------
@@ -379,7 +351,7 @@ def write_predictions(
     if sem.shape != ids.shape:
         raise ValueError(f"semantics has shape {sem.shape} but cluster_ids has shape {ids.shape}")
     path = predictions_path(out_root, sequence, frame)
-    write_label(path, encode_labels(sem, ids))
+    write_label(path, encode(sem, ids))
     return path
 
 
@@ -413,6 +385,72 @@ def read_predictions(
 
 
 # ---------------------------------------------------------------------------------------------
+# Semantics (``flic segment --semantics``, see :mod:`flic_cli.semantics`)
+# ---------------------------------------------------------------------------------------------
+
+
+def semantics_path(root: str | Path, sequence: str, frame: int) -> Path:
+    """``<root>/sequences/<sequence>/predictions/<frame:06d>.label`` (:mod:`flic_cli.semantics`)."""
+    return predictions_path(root, sequence, frame)
+
+
+def read_semantics(root: str | Path, sequence: str, frame: int, n_points: int) -> np.ndarray:
+    """Read a semantic network's classes for one frame.
+
+    Parameters
+    ----------
+    root : the ``--semantics`` folder (``<root>/sequences/<NN>/predictions/<XXXXXX>.label``).
+    sequence, frame : which frame.
+    n_points : number of points of the scan as stored in its ``.bin`` (one label each).
+
+    Returns
+    -------
+    (N,) uint16 raw SemanticKITTI class ids (the lower 16 bits of each label).
+
+    Raises
+    ------
+    FlicInputError
+        Naming the file when it is missing, holds another number of labels than the scan has
+        points, or holds a class that SemanticKITTI does not define.
+    """
+    path = semantics_path(root, sequence, frame)
+    sem = semantic(read_label(path, n_points)).astype(np.uint16)
+    unknown = np.unique(sem[~known_classes(sem)])
+    if unknown.size:
+        listed = ", ".join(str(int(u)) for u in unknown[:5])
+        more = f" and {unknown.size - 5} more" if unknown.size > 5 else ""
+        raise FlicInputError(
+            path, f"holds semantic classes that SemanticKITTI does not define: {listed}{more}"
+        )
+    return sem
+
+
+def write_semantic_predictions(
+    out_root: str | Path,
+    sequence: str,
+    frame: int,
+    semantics: np.ndarray,
+    cluster_ids: np.ndarray,
+) -> Path:
+    """Write one frame's panoptic prediction: :func:`flic_cli.semantics.combine`, then
+    :func:`write_predictions`.
+
+    Parameters
+    ----------
+    out_root : the output root (``<out_root>/sequences/<NN>/predictions/<XXXXXX>.label``).
+    sequence, frame : which frame.
+    semantics : (N,) raw class ids, one per point of the scan as stored.
+    cluster_ids : (N,) cluster ids (0 = unclustered), one per point of the scan as stored.
+
+    Returns
+    -------
+    The written file.
+    """
+    labels = combine(semantics, cluster_ids)
+    return write_predictions(out_root, sequence, frame, instance(labels), semantic(labels))
+
+
+# ---------------------------------------------------------------------------------------------
 # Dataset
 # ---------------------------------------------------------------------------------------------
 
@@ -427,20 +465,6 @@ def _sequence_dirs(root: Path) -> dict[str, Path]:
     if (root / "velodyne").is_dir():
         return {root.name: root}
     return {d.name: d for d in sorted((root / "sequences").iterdir()) if (d / "velodyne").is_dir()}
-
-
-def in_frames(frame: int, frames: tuple[int | None, int | None] | None) -> bool:
-    """True when ``frame`` lies in ``frames = (start, stop)`` (stop exclusive, None = open)."""
-    if frames is None:
-        return True
-    start, stop = frames
-    return (start is None or frame >= start) and (stop is None or frame < stop)
-
-
-def frames_text(frames: tuple[int | None, int | None]) -> str:
-    """``(10, None)`` -> ``"10:"``: a frame range as the command line writes it."""
-    start, stop = frames
-    return f"{'' if start is None else start}:{'' if stop is None else stop}"
 
 
 class SemanticKittiDataset:
@@ -465,6 +489,7 @@ class SemanticKittiDataset:
     """
 
     format = FORMAT
+    point_semantics = True
     detect = staticmethod(is_semantickitti)
 
     def __init__(
@@ -495,8 +520,24 @@ class SemanticKittiDataset:
                 found = {s: d for s, d in found.items() if s not in unlabelled}
         self._refs: list[FrameRef] = []
         for name, seq_dir in found.items():
+            seen: dict[int, Path] = {}
             for bin_path in sorted((seq_dir / "velodyne").glob("*.bin")):
-                if not bin_path.stem.isdigit() or not in_frames(int(bin_path.stem), frames):
+                if not bin_path.stem.isdigit():
+                    continue
+                if not bin_path.stem.isascii():  # e.g. "00①" or Arabic-Indic digits
+                    warnings.warn(
+                        f"{bin_path}: left out: frame numbers are written in the digits 0-9",
+                        stacklevel=2,
+                    )
+                    continue
+                number = int(bin_path.stem)
+                if number in seen:
+                    raise FlicInputError(
+                        bin_path,
+                        f"names frame {number} like {seen[number].name}: keep one of the two files",
+                    )
+                seen[number] = bin_path
+                if not in_frames(number, frames):
                     continue
                 label_path = seq_dir / "labels" / f"{bin_path.stem}.label"
                 self._refs.append(
@@ -526,6 +567,10 @@ class SemanticKittiDataset:
         """Every selected frame, ordered by sequence then frame number."""
         return list(self._refs)
 
+    def labelled(self) -> bool:
+        """Whether some selected frame has a ``labels/<XXXXXX>.label`` file."""
+        return any(r.label_path is not None for r in self._refs)
+
     def folders(self) -> list[Path]:
         """The folders of the selected sequences (outputs must not go inside them)."""
         return sorted({r.path.parents[1] for r in self._refs})
@@ -549,8 +594,6 @@ class SemanticKittiDataset:
         """
         if semantics is None:
             return write_predictions(out, ref.sequence, ref.frame, labels)
-        from flic_cli.semantics import write_semantic_predictions
-
         return write_semantic_predictions(out, ref.sequence, ref.frame, semantics, labels)
 
     @staticmethod
@@ -562,4 +605,7 @@ class SemanticKittiDataset:
     def load(self, ref: FrameRef) -> Frame:
         """Read one frame (points with non-finite coordinates dropped, with a warning)."""
         scan = read_scan(ref.path, ref.label_path)
-        return Frame(ref, scan.points, scan.labels, finite=scan.finite)
+        stored = None
+        if scan.finite is not None and ref.label_path is not None:  # rare: re-read all labels
+            stored = read_label(ref.label_path, scan.finite.size)
+        return Frame(ref, scan.points, scan.labels, finite=scan.finite, stored_labels=stored)

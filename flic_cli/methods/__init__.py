@@ -1,5 +1,5 @@
 """The clusterers. To add a method: a component class with ``segment(image, points, ground)``
-(see :class:`flic_cli.methods.base.Method` and :mod:`flic_cli.config.component`), named in
+(see :class:`flic_cli.methods.base.Method` and :mod:`flic_cli.component`), named in
 :data:`flic_cli.registry.METHODS` under the ``kind`` that config files use."""
 
 from flic_cli.methods.base import Method, drop_small

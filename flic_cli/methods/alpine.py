@@ -31,7 +31,7 @@ keeps every cluster, down to one point).
 
 from __future__ import annotations
 
-from typing import Annotated, ClassVar
+from typing import TYPE_CHECKING, Annotated, ClassVar
 
 import numpy as np
 from pydantic import Field
@@ -41,10 +41,13 @@ from scipy.sparse.csgraph import connected_components
 from scipy.spatial import ConvexHull, QhullError, cKDTree
 
 from flic_cli.classes import learning_class
-from flic_cli.config.component import STRICT
+from flic_cli.component import STRICT
 from flic_cli.errors import FlicInputError
 from flic_cli.methods._peers import cluster_kept
 from flic_cli.range_image import RangeImage
+
+if TYPE_CHECKING:
+    from flic_cli.ground.base import Ground
 
 #: Training class -> (length, width) of its box, metres (the reference's SemanticKITTI table).
 BOXES: dict[int, tuple[float, float]] = {
@@ -88,6 +91,7 @@ class Alpine:
     main_param: ClassVar[str] = "width_scale"
     sweep_range: ClassVar[tuple[float, float, float]] = (0.4, 1.6, 0.1)
     slow: ClassVar[bool] = False
+    sweep_label: ClassVar[str] = "ALPINE link distance x box width"
 
     @property
     def needs_semantics(self) -> bool:
@@ -98,7 +102,7 @@ class Alpine:
         self,
         image: RangeImage,
         points: np.ndarray,
-        ground: np.ndarray | None,
+        ground: Ground | None,
         semantics: np.ndarray | None = None,
     ) -> np.ndarray:
         """Per-point labels; ``semantics``: (N,) raw SemanticKITTI class of every point (only

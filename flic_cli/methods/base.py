@@ -2,38 +2,62 @@
 
 from __future__ import annotations
 
-from typing import ClassVar, Protocol
+from typing import TYPE_CHECKING, ClassVar, Protocol
 
 import numpy as np
 
 from flic_cli.range_image import RangeImage
+
+if TYPE_CHECKING:
+    from flic_cli.ground.base import Ground
 
 
 class Method(Protocol):
     """A clusterer.
 
     ``segment(image, points, ground)`` returns one int32 label per point of the scan: 0 =
-    unclustered or ground, 1..K = clusters. ``ground`` is the (H, W) ground mask of the chosen
-    remover or None (nothing removed). ``points`` are the scan's (N, 3) points, pixel
-    ``image.point_pixel[i]`` for point i. ``main_param`` names the parameter that
-    ``flic sweep-threshold`` varies.
+    unclustered or ground, 1..K = clusters. ``ground`` is the ground step's decision
+    (:class:`flic_cli.ground.base.Ground`, whose ``image`` is ``image``) or None (nothing
+    removed): image methods leave out the pixels of ``ground.left_out``, 3D methods the points
+    whose pixel is left out or -1; the points of held cells take the cluster of the cell
+    standing on them (``ground.attached``). ``points`` are the scan's (N, 3) points, pixel
+    ``image.point_pixel[i]`` for point i.
+
+    What the runs need to know is declared on the class: ``main_param`` names the parameter that
+    ``flic sweep-threshold`` varies, ``sweep_range = (from, to, step)`` its default range and
+    ``sweep_label`` its axis label (with unit); ``slow = True`` makes ``flic benchmark`` time the
+    method on every n-th frame only (``--slow-every``, as DBSCAN). A method that needs an
+    optional package names it in its :data:`flic_cli.registry.METHODS` entry (``requires``,
+    ``install``) or defines ``check_installed(self)`` when it depends on a parameter.
     """
 
     main_param: ClassVar[str]
+    sweep_range: ClassVar[tuple[float, float, float]]
+    sweep_label: ClassVar[str]
+    slow: ClassVar[bool]
 
     def segment(
-        self, image: RangeImage, points: np.ndarray, ground: np.ndarray | None
+        self, image: RangeImage, points: np.ndarray, ground: Ground | None
     ) -> np.ndarray: ...
+
+
+def ground_parts(ground: Ground | None) -> tuple[np.ndarray | None, np.ndarray | None]:
+    """What the kernels read of a ground step: the (H, W) bool pixels left out (ground and held)
+    and the (K, 3) held cells' attachments (:attr:`flic_cli.ground.base.Ground.attached`);
+    None, None without one."""
+    if ground is None:
+        return None, None
+    return ground.left_out, ground.attached
 
 
 def point_weights(image: RangeImage) -> np.ndarray | None:
     """Points per pixel of ``image`` for the minimum cluster size, or None for one per node.
 
-    A sensor's own image (``projection == "native"``, see
+    A sensor's own image (:attr:`flic_cli.range_image.RangeImage.one_point_per_pixel`, see
     :func:`flic_cli.range_image.from_sensor_image`) holds exactly one point per valid pixel, so the
     kernels need not read its counts.
     """
-    return None if image.projection == "native" else image.point_counts()
+    return None if image.one_point_per_pixel else image.point_counts()
 
 
 def drop_small(labels: np.ndarray, min_size: int, weights: np.ndarray | None = None) -> np.ndarray:

@@ -2,17 +2,20 @@
 
 from __future__ import annotations
 
-from typing import Annotated, ClassVar
+from typing import TYPE_CHECKING, Annotated, ClassVar
 
 import numpy as np
 from pydantic import Field
 from pydantic.dataclasses import dataclass
 
-from flic_cli.config.component import STRICT
-from flic_cli.methods._unionfind import ANGLE, run_kernel
-from flic_cli.methods.base import point_weights
+from flic_cli.component import STRICT
+from flic_cli.methods.base import ground_parts, point_weights
+from flic_cli.methods.connections import ANGLE, run_kernel
 from flic_cli.methods.flic import cached_sets
 from flic_cli.range_image import RangeImage
+
+if TYPE_CHECKING:
+    from flic_cli.ground.base import Ground
 
 #: the key of the direct connections alone (see :func:`flic_cli.methods.flic.cached_sets`)
 DIRECT = ((), "map")
@@ -38,10 +41,12 @@ class Bogoslavskyi:
     angle_deg: Annotated[float, Field(gt=0, lt=90, description="angle threshold, degrees")] = 10.0
     min_size: Annotated[int, Field(ge=1, description="smallest cluster kept, points")] = 100
     main_param: ClassVar[str] = "angle_deg"
+    sweep_range: ClassVar[tuple[float, float, float]] = (2.0, 30.0, 1.0)
+    sweep_label: ClassVar[str] = "angle threshold beta [deg]"
+    slow: ClassVar[bool] = False
 
-    def segment(
-        self, image: RangeImage, points: np.ndarray, ground: np.ndarray | None
-    ) -> np.ndarray:
+    def segment(self, image: RangeImage, points: np.ndarray, ground: Ground | None) -> np.ndarray:
+        left_out, attached = ground_parts(ground)
         return run_kernel(
             image.ranges,
             image.elevation,
@@ -50,10 +55,10 @@ class Bogoslavskyi:
             ANGLE,
             float(np.tan(np.radians(self.angle_deg))),
             self.min_size,
-            ground,
+            left_out,
             point_weights(image),
             image.point_pixel,
-            image.attached,
+            attached,
         )
 
 

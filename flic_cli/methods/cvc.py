@@ -23,15 +23,18 @@ search (no dense grid).
 
 from __future__ import annotations
 
-from typing import Annotated, ClassVar
+from typing import TYPE_CHECKING, Annotated, ClassVar
 
 import numpy as np
 from pydantic import Field
 from pydantic.dataclasses import dataclass
 
-from flic_cli.config.component import STRICT
+from flic_cli.component import STRICT
 from flic_cli.methods._peers import cluster_kept, components
 from flic_cli.range_image import RangeImage
+
+if TYPE_CHECKING:
+    from flic_cli.ground.base import Ground
 
 
 @dataclass(frozen=True, config=STRICT)
@@ -53,10 +56,9 @@ class Cvc:
     main_param: ClassVar[str] = "delta_range_m"
     sweep_range: ClassVar[tuple[float, float, float]] = (0.1, 1.5, 0.1)
     slow: ClassVar[bool] = False
+    sweep_label: ClassVar[str] = "CVC range step [m]"
 
-    def segment(
-        self, image: RangeImage, points: np.ndarray, ground: np.ndarray | None
-    ) -> np.ndarray:
+    def segment(self, image: RangeImage, points: np.ndarray, ground: Ground | None) -> np.ndarray:
         return cluster_kept(image, points, ground, lambda p, _: self.raw(p) + 1, self.min_size)
 
     def raw(self, points: np.ndarray) -> np.ndarray:

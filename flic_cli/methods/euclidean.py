@@ -18,16 +18,19 @@ time, never more than ``PAIR_BUDGET + N`` stored pairs.
 
 from __future__ import annotations
 
-from typing import Annotated, ClassVar
+from typing import TYPE_CHECKING, Annotated, ClassVar
 
 import numpy as np
 from pydantic import Field
 from pydantic.dataclasses import dataclass
 from scipy.spatial import cKDTree
 
-from flic_cli.config.component import STRICT
+from flic_cli.component import STRICT
 from flic_cli.methods._peers import cluster_kept, components
 from flic_cli.range_image import RangeImage
+
+if TYPE_CHECKING:
+    from flic_cli.ground.base import Ground
 
 #: Most point pairs held in memory at once (8 bytes per index: 2**23 pairs = 128 MiB).
 PAIR_BUDGET = 1 << 23
@@ -48,10 +51,9 @@ class Euclidean:
     main_param: ClassVar[str] = "tolerance_m"
     sweep_range: ClassVar[tuple[float, float, float]] = (0.1, 1.5, 0.1)
     slow: ClassVar[bool] = False
+    sweep_label: ClassVar[str] = "Euclidean tolerance [m]"
 
-    def segment(
-        self, image: RangeImage, points: np.ndarray, ground: np.ndarray | None
-    ) -> np.ndarray:
+    def segment(self, image: RangeImage, points: np.ndarray, ground: Ground | None) -> np.ndarray:
         return cluster_kept(
             image, points, ground, lambda p, _: radius_components(p, self.tolerance_m) + 1,
             self.min_size,

@@ -3,16 +3,19 @@
 from __future__ import annotations
 
 from functools import lru_cache
-from typing import Annotated, ClassVar, Literal
+from typing import TYPE_CHECKING, Annotated, ClassVar, Literal
 
 import numpy as np
 from pydantic import Field, NonNegativeInt, field_validator
 from pydantic.dataclasses import dataclass
 
-from flic_cli.config.component import STRICT
-from flic_cli.methods._unionfind import DISTANCE, run_kernel
-from flic_cli.methods.base import point_weights
+from flic_cli.component import STRICT
+from flic_cli.methods.base import ground_parts, point_weights
+from flic_cli.methods.connections import DISTANCE, run_kernel
 from flic_cli.range_image import RangeImage
+
+if TYPE_CHECKING:
+    from flic_cli.ground.base import Ground
 
 MC_MODES = ("map", "neighbour")
 
@@ -33,7 +36,7 @@ def connection_sets(
     Returns
     -------
     steps (M, 2), offsets (M, 2), lattice (M,) arrays for
-    :func:`flic_cli.methods._unionfind.connect`.
+    :func:`flic_cli.methods.connections.components`.
     """
     if mc_mode not in MC_MODES:
         raise ValueError(f"mc_mode must be one of {MC_MODES}, got {mc_mode!r}")
@@ -111,6 +114,9 @@ class Flic:
     mc_mode: Literal["map", "neighbour"] = "map"
     backend: Literal["numba", "scipy"] = "numba"
     main_param: ClassVar[str] = "threshold_m"
+    sweep_range: ClassVar[tuple[float, float, float]] = (0.2, 1.5, 0.05)
+    sweep_label: ClassVar[str] = "distance threshold [m]"
+    slow: ClassVar[bool] = False
 
     @field_validator("maps")
     @classmethod
@@ -119,11 +125,10 @@ class Flic:
             check_map(m)
         return maps
 
-    def segment(
-        self, image: RangeImage, points: np.ndarray, ground: np.ndarray | None
-    ) -> np.ndarray:
+    def segment(self, image: RangeImage, points: np.ndarray, ground: Ground | None) -> np.ndarray:
+        left_out, attached = ground_parts(ground)
         if self.backend == "scipy":
-            mask = image.ranges > 0 if ground is None else (image.ranges > 0) & ~ground
+            mask = image.ranges > 0 if left_out is None else (image.ranges > 0) & ~left_out
             labels = flic_labels_scipy(
                 image.ranges,
                 image.elevation,
@@ -133,7 +138,7 @@ class Flic:
                 self.mc_mode,
                 mask,
                 image.point_counts(),
-                image.attached,
+                attached,
             )
             return image.point_labels(labels)
         key = (maps_key(self.maps), self.mc_mode)
@@ -145,10 +150,10 @@ class Flic:
             DISTANCE,
             float(self.threshold_m) ** 2,
             self.min_size,
-            ground,
+            left_out,
             point_weights(image),
             image.point_pixel,
-            image.attached,
+            attached,
         )
 
 
@@ -171,7 +176,7 @@ def flic_labels_scipy(
     labels, merged by ``scipy.sparse.csgraph.connected_components``. Kept as the reference (the
     tests check the numba kernel against it) and as the paper-style peer in benchmarks
     (``backend = "scipy"``). Parameters as :func:`flic_labels`; ``attached``: held pixels, see
-    :func:`flic_cli.methods._unionfind.connect`.
+    :func:`flic_cli.methods.connections.components`.
     """
     from scipy import ndimage
     from scipy.sparse import coo_matrix

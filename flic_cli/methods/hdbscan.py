@@ -8,15 +8,18 @@ every n-th frame only, as DBSCAN).
 
 from __future__ import annotations
 
-from typing import Annotated, ClassVar
+from typing import TYPE_CHECKING, Annotated, ClassVar
 
 import numpy as np
 from pydantic import Field
 from pydantic.dataclasses import dataclass
 
-from flic_cli.config.component import STRICT
+from flic_cli.component import STRICT
 from flic_cli.methods._peers import cluster_kept
 from flic_cli.range_image import RangeImage
+
+if TYPE_CHECKING:
+    from flic_cli.ground.base import Ground
 
 
 @dataclass(frozen=True, config=STRICT)
@@ -43,10 +46,9 @@ class Hdbscan:
     main_param: ClassVar[str] = "min_cluster_size"
     sweep_range: ClassVar[tuple[float, float, float]] = (10, 100, 15)
     slow: ClassVar[bool] = True
+    sweep_label: ClassVar[str] = "HDBSCAN min_cluster_size [points]"
 
-    def segment(
-        self, image: RangeImage, points: np.ndarray, ground: np.ndarray | None
-    ) -> np.ndarray:
+    def segment(self, image: RangeImage, points: np.ndarray, ground: Ground | None) -> np.ndarray:
         return cluster_kept(image, points, ground, lambda p, _: self.raw(p) + 1, self.min_size)
 
     def raw(self, points: np.ndarray) -> np.ndarray:

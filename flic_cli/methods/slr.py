@@ -21,16 +21,20 @@ components.
 
 from __future__ import annotations
 
-from typing import Annotated, ClassVar
+from typing import TYPE_CHECKING, Annotated, ClassVar
 
 import numpy as np
 from numba import njit
 from pydantic import Field
 from pydantic.dataclasses import dataclass
 
-from flic_cli.config.component import STRICT
+from flic_cli.component import STRICT
 from flic_cli.methods._peers import pixel_point_labels
+from flic_cli.methods.base import ground_parts
 from flic_cli.range_image import RangeImage
+
+if TYPE_CHECKING:
+    from flic_cli.ground.base import Ground
 
 
 @dataclass(frozen=True, config=STRICT)
@@ -50,17 +54,15 @@ class Slr:
     main_param: ClassVar[str] = "run_m"
     sweep_range: ClassVar[tuple[float, float, float]] = (0.1, 1.5, 0.1)
     slow: ClassVar[bool] = False
+    sweep_label: ClassVar[str] = "SLR run distance [m]"
 
-    def segment(
-        self, image: RangeImage, points: np.ndarray, ground: np.ndarray | None
-    ) -> np.ndarray:
+    def segment(self, image: RangeImage, points: np.ndarray, ground: Ground | None) -> np.ndarray:
         valid = image.ranges > 0
-        if ground is not None:
-            valid &= ~np.asarray(ground, dtype=bool).reshape(valid.shape)
-        if image.attached is not None and len(image.attached):
-            valid.reshape(-1)[image.attached[:, 0]] = False
+        left_out, _ = ground_parts(ground)  # ground and held pixels
+        if left_out is not None:
+            valid &= ~np.asarray(left_out, dtype=bool).reshape(valid.shape)
         pixel = slr_pixels(image, valid, self.run_m, self.merge_m)
-        return pixel_point_labels(image, pixel, self.min_size)
+        return pixel_point_labels(image, pixel, self.min_size, ground)
 
 
 def slr_pixels(image: RangeImage, valid: np.ndarray, run_m: float, merge_m: float) -> np.ndarray:

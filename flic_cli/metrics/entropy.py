@@ -30,7 +30,7 @@ from __future__ import annotations
 import numpy as np
 
 from flic_cli.classes import GROUND_CLASSES, thing_mask
-from flic_cli.io.semantickitti import instance, semantic
+from flic_cli.labels import instance, semantic
 
 __all__ = [
     "continuous_clustering_ground_truth",

@@ -5,8 +5,8 @@ of the pooled objects of many frames); nothing keeps state between calls.
 
 Conventions
 -----------
-- Ground truth labels are SemanticKITTI ``uint32`` values: ``semantic = label & 0xFFFF``,
-  ``instance = label >> 16``.
+- Ground truth labels are SemanticKITTI ``uint32`` values (:mod:`flic_cli.labels`: semantic
+  class in the lower 16 bits, instance id in the upper 16).
 - Predictions are integer cluster ids per point; ``0`` (and, leniently, any negative value such as
   DBSCAN's ``-1``) means *unclustered*: such a point belongs to no cluster.
 - The arrays passed in are the *evaluated point set*: in the "No Ground" setting the caller drops
@@ -44,6 +44,7 @@ import numpy as np
 from numba import njit
 
 from flic_cli.classes import THING_LUT
+from flic_cli.labels import SEMANTIC_MASK, instance, semantic
 
 __all__ = [
     "DISTANCE_BANDS",
@@ -181,7 +182,7 @@ def _scan_frame(
         if p > 0:
             sizes[p] += 1
         g = gt[i]
-        if g > 0xFFFF and thing_lut[g & 0xFFFF]:
+        if g > SEMANTIC_MASK and thing_lut[g & SEMANTIC_MASK]:
             runs += g != last
             last = g
             index[t] = i
@@ -386,8 +387,8 @@ def score_frame(
 
     matches = ObjectMatches(
         label=obj_labels.astype(np.uint32),
-        semantic=(obj_labels & 0xFFFF).astype(np.int64),
-        instance=(obj_labels >> 16).astype(np.int64),
+        semantic=semantic(obj_labels).astype(np.int64),
+        instance=instance(obj_labels).astype(np.int64),
         n_points=obj_sizes,
         distance=distance,
         cluster=cluster,

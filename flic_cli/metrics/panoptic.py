@@ -92,6 +92,7 @@ from flic_cli.classes import (
     learning_class,
     thing_mask,
 )
+from flic_cli.labels import SEMANTIC_MASK
 
 __all__ = [
     "EPS",
@@ -385,7 +386,7 @@ def _agnostic_pass(
     area = np.zeros(n_ids, dtype=np.int64)
     n_thing = 0
     for i in range(gt.size):
-        if thing[gt[i] & 0xFFFF] and gt[i] > 0xFFFF:
+        if thing[gt[i] & SEMANTIC_MASK] and gt[i] > SEMANTIC_MASK:
             n_thing += 1
     t_label = np.empty(n_thing, dtype=np.uint32)
     t_cluster = np.empty(n_thing, dtype=np.int64)
@@ -394,10 +395,10 @@ def _agnostic_pass(
     for i in range(gt.size):
         g = gt[i]
         c = p[i]
-        if c > 0 and evaluated[g & 0xFFFF]:
+        if c > 0 and evaluated[g & SEMANTIC_MASK]:
             area[c] += 1
             n_clustered += 1
-        if thing[g & 0xFFFF] and g > 0xFFFF:
+        if thing[g & SEMANTIC_MASK] and g > SEMANTIC_MASK:
             t_label[k] = g
             t_cluster[k] = c
             k += 1

@@ -16,8 +16,8 @@ Procedure
    0.204 ms per 870 x 64 frame).
    The garbage collector is disabled during each timed call. ``--repeat R`` times each call R
    times and keeps the median.
-3. Methods of kind ``dbscan`` run only on frames whose position in the selection is a multiple of
-   ``dbscan_every`` (DBSCAN takes seconds per frame).
+3. Methods declared slow (``slow = True`` on the class: DBSCAN, seconds per frame) run only on
+   frames whose position in the selection is a multiple of ``slow_every``.
 4. ``--rounds N`` makes N rounds of these passes, the order of the passes turned by one each
    round, and keeps each frame's median over the rounds. On a shared machine, other work slows
    every call that runs at the same moment (back-to-back repeats included), which shows up as
@@ -48,6 +48,10 @@ Outputs (all written atomically)
 ``environment.json``
     CPU, cores, Python and library versions, threads in effect, command line, date, the run's
     parameters and the warm-up (first-call) times.
+``latency.csv`` (recordings: bags, pcaps)
+    Per method and revolution, decode + range image + ground + cluster in recording order, each
+    stage timed (:mod:`flic_cli.runs.latency`); the report says whether the p99 keeps up with
+    10 / 20 Hz.
 ``runtime.png``, ``boxplot_hz.png``, ``histogram.png``
     Per-frame runtime over the log on a log scale (paper Fig. 9), box plot of the per-frame rate
     in Hz (Fig. 10), runtime histograms.
@@ -66,15 +70,15 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from flic_cli.config import Config
 from flic_cli.errors import FlicInputError
 from flic_cli.io import open_dataset
 from flic_cli.io.atomic import atomic_write, write_table
 from flic_cli.io.base import FrameRef
 from flic_cli.projection import Projection
+from flic_cli.runs import latency
 from flic_cli.runs.environment import collect_environment, environment_line, thread_limits
 from flic_cli.runs.frames import FrameLoop, sort_skipped, write_skipped
-from flic_cli.runs.output import check_output_dir
+from flic_cli.runs.output import check_output_dir, holding_out_lock
 from flic_cli.runs.pipeline import (
     Segmenter,
     build_segmenters,
@@ -82,6 +86,7 @@ from flic_cli.runs.pipeline import (
     prepare,
     prepared_semantics,
 )
+from flic_cli.runs.spec import BenchmarkRun
 
 #: Speed-ups measured on fewer frames than this are printed as an indication only.
 FEW_FRAMES = 30
@@ -397,69 +402,39 @@ class BenchJob:
         ]
 
 
-def run_benchmark(
-    data: Path,
-    out: Path,
-    methods: list[str],
-    config: Config,
-    setting: str = "ground",
-    sequences: list[str] | None = None,
-    frames: tuple[int | None, int | None] | None = None,
-    ground_remover: str = "own",
-    warmup: int = 3,
-    repeat: int = 1,
-    rounds: int = 1,
-    dbscan_every: int = 10,
-    threads: int = 1,
-    plots: bool = True,
-    progress: bool = True,
-    skip_bad: bool = False,
-) -> BenchmarkResult:
+@holding_out_lock
+def run_benchmark(spec: BenchmarkRun) -> BenchmarkResult:
     """Time every method on every selected frame and write the tables, plots and environment.
 
     Parameters
     ----------
-    data : SemanticKITTI root or sequence, or Moosmann log.
-    out : output folder (created).
-    methods : method variant names of the config.
-    config : loaded config.
-    setting : ``"ground"`` (ground extraction timed as part of every method) or ``"no-ground"``.
-    sequences, frames : the selection (see :func:`flic_cli.io.open_dataset`).
-    ground_remover : ``"own"`` or a remover's name (see
-        :func:`flic_cli.runs.pipeline.build_segmenter`).
-    warmup : untimed runs of every method on the first frame (0: the first timed frame includes
-        compilation).
-    repeat : timed runs per frame and method, back to back; the median is kept.
-    rounds : passes over the whole selection; each frame's median over the passes is kept.
-    dbscan_every : methods of kind ``dbscan`` run only on frames whose position in the selection
-        is a multiple of this.
-    threads : threads of numba and the native thread pools during the run.
-    plots : write the PNG plots.
-    progress : show a progress bar.
-    skip_bad : go on past frames whose input is bad (listed in ``skipped.csv``) instead of
-        stopping at the first.
+    spec : what to time and how (:class:`flic_cli.runs.spec.BenchmarkRun`; the selection's
+        setting defaults to ``"ground"``, ground extraction timed as part of every method, its
+        ground remover to ``"own"``; ``jobs`` is not used, timing runs in one process).
 
     Returns
     -------
     BenchmarkResult
     """
-    if warmup < 0 or repeat < 1 or rounds < 1 or dbscan_every < 1 or threads < 1:
+    sel = spec.selection
+    data, out, methods, config = sel.data, spec.out, spec.methods, sel.loaded_config()
+    setting, ground_remover = sel.setting_or("ground"), sel.remover_or("own")
+    warmup, repeat, rounds, slow_every = spec.warmup, spec.repeat, spec.rounds, spec.slow_every
+    threads, plots, progress, skip_bad = spec.threads, spec.plots, sel.progress, sel.skip_bad
+    if warmup < 0 or repeat < 1 or rounds < 1 or slow_every < 1 or threads < 1:
         raise FlicInputError(
-            None, "--warmup must be >= 0, --repeat, --rounds, --dbscan-every and --threads >= 1"
+            None, "--warmup must be >= 0, --repeat, --rounds, --slow-every and --threads >= 1"
         )
     clash = [m for m in methods if m in STAGES]
     if clash:
         raise FlicInputError(None, f"method name {clash[0]!r} is reserved for a timed stage")
     methods = list(dict.fromkeys(methods))
-    ds = open_dataset(data, sequences, frames, require_labels=setting == "no-ground")
+    ds = open_dataset(data, sel.sequences, sel.frames, require_labels=setting == "no-ground")
     refs = ds.refs()
     out = check_output_dir(Path(out), ds.folders())
     segs = build_segmenters(config, methods, setting, ground_remover)
     index = {r: k for k, r in enumerate(refs)}
-    every = {
-        s.name: dbscan_every if s.kind == "dbscan" or getattr(s.method, "slow", False) else 1
-        for s in segs
-    }
+    every = {s.name: slow_every if getattr(s.method, "slow", False) else 1 for s in segs}
 
     # one job per method, and one (None) for reading and projection: each has a pass of its own
     jobs = {
@@ -505,7 +480,7 @@ def run_benchmark(
             n = int((table["method"] == m).sum())
             notes.append(
                 f"{m}: timed only on frames with index % {every[m]} == 0 ({n} of {timed_frames} "
-                f"frames, --dbscan-every {every[m]}); its speed-ups are computed on those frames"
+                f"frames, --slow-every {every[m]}); its speed-ups are computed on those frames"
             )
     if thread_info["numba"] != threads:
         notes.append(
@@ -530,7 +505,7 @@ def run_benchmark(
         frames_timed=timed_frames,
         repeat=repeat,
         rounds=rounds,
-        dbscan_every=dbscan_every,
+        slow_every=slow_every,
         subsampled={m: every[m] for m in methods if every[m] > 1},
         skipped_frames=[s.line() for s in sort_skipped(loop.skipped)],
         warmup={
@@ -549,6 +524,10 @@ def run_benchmark(
     write_table(files[1], summary)
     write_table(files[2], hist)
     _write_json(env, files[3])
+    if getattr(ds, "format", None) in latency.STREAMS:  # a recording: latency per revolution
+        lat = latency.measure(ds, refs, segs, setting, config.projection, progress)
+        files.append(write_table(out / "latency.csv", lat))
+        notes += latency.report(lat)
     if plots:
         name = Path(data).name or str(data)
         files += _plots(table, methods, out, f"{name}, {timed_frames} frames, {setting} setting")

@@ -29,14 +29,15 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from flic_cli import registry
 from flic_cli.config import Config
 from flic_cli.errors import FlicInputError
 from flic_cli.io import open_dataset
 from flic_cli.io.atomic import write_table
-from flic_cli.io.base import FrameRef
+from flic_cli.io.base import Dataset, FrameRef
 from flic_cli.runs.frames import FrameLoop, Skipped, sort_skipped, write_skipped
-from flic_cli.runs.output import check_output_dir
-from flic_cli.runs.parallel import resolve_jobs
+from flic_cli.runs.output import check_output_dir, holding_out_lock
+from flic_cli.runs.parallel import SchedulerError, check_scheduler, resolve_jobs
 from flic_cli.runs.pipeline import build_segmenters
 from flic_cli.runs.scoring import (
     FRAME_COLUMNS,
@@ -46,6 +47,7 @@ from flic_cli.runs.scoring import (
     FrameScores,
     ScoreJob,
 )
+from flic_cli.runs.spec import EvaluateRun
 from flic_cli.runs.store import PARTS, open_store, read_parts, write_part
 from flic_cli.runs.tables import (
     all_tables,
@@ -109,7 +111,7 @@ def estimate_line(
     )
     if scheduler is not None:
         return line + "; divide by the number of dask worker threads"
-    workers = resolve_jobs(jobs)
+    workers = resolve_jobs(jobs, remaining)
     return line + (f" / {workers} processes = {_duration(total / workers)}" if workers > 1 else "")
 
 
@@ -168,8 +170,8 @@ def select_labelled(
     sequences: list[str] | None,
     frames: tuple[int | None, int | None] | None,
     skip_missing: bool,
-) -> tuple[list[FrameRef], int, list[Path]]:
-    """The selected frames that have labels, how many lacked them, and the data's folders.
+) -> tuple[Dataset, list[FrameRef], int]:
+    """The dataset, its selected frames that have labels, and how many lacked them.
 
     Raises
     ------
@@ -178,14 +180,15 @@ def select_labelled(
     """
     ds = open_dataset(data, sequences, frames, require_labels=not skip_missing)
     refs = ds.refs()
-    labelled = [r for r in refs if r.label_path is not None]
+    labelled = [r for r in refs if r.label_path is not None] if ds.labelled() else []
     if not labelled:
+        formats = [n for n, e in registry.FORMATS.items() if e.labelled]
         raise FlicInputError(
             data,
-            "no selected frame has ground-truth labels: evaluation needs labelled SemanticKITTI "
-            "data (sequences/NN/labels/*.label)",
+            "no selected frame has ground-truth labels: evaluation needs labelled data "
+            f"({', '.join(formats)}; SemanticKITTI: sequences/NN/labels/*.label)",
         )
-    return labelled, len(refs) - len(labelled), ds.folders()
+    return ds, labelled, len(refs) - len(labelled)
 
 
 def run_parameters(
@@ -213,84 +216,59 @@ def run_parameters(
     return json.loads(json.dumps(params, default=str))
 
 
-def run_evaluate(
-    data: Path,
-    out: Path,
-    methods: list[str],
-    config: Config,
-    setting: str = "both",
-    sequences: list[str] | None = None,
-    frames: tuple[int | None, int | None] | None = None,
-    ground_remover: str = "paper",
-    jobs: int = 1,
-    scheduler: str | None = None,
-    resume: bool = False,
-    skip_missing: bool = False,
-    skip_bad: bool = False,
-    progress: bool = True,
-    on_start: Any = None,
-    on_estimate: Any = None,
-    semantics: str = "none",
-    runtimes: Path | None = None,
-) -> EvaluateResult:
-    """Evaluate methods on every selected labelled frame and write the tables to ``out``.
+@holding_out_lock
+def run_evaluate(spec: EvaluateRun) -> EvaluateResult:
+    """Evaluate methods on every selected labelled frame and write the tables to ``spec.out``.
 
     Parameters
     ----------
-    data : SemanticKITTI root or sequence folder, with labels.
-    out : output folder (``parts/``, ``run.json`` and the tables).
-    methods : method variant names of the config.
-    config : the loaded config.
-    setting : ``"no-ground"``, ``"ground"`` or ``"both"``.
-    sequences, frames : selection (see :func:`flic_cli.io.open_dataset`).
-    ground_remover : ground extraction of the ground setting: a remover's name (``"paper"``:
-        the protocol, the paper's for every method) or ``"own"`` (each variant's ``ground``).
-    jobs : local processes (see :func:`flic_cli.runs.parallel.imap_frames`).
-    scheduler : dask.distributed scheduler address, instead of local processes.
-    resume : continue the run stored in ``out`` (same parameters), skipping its finished frames.
-    skip_missing : evaluate only the frames that have a ``.label`` file instead of failing.
-    skip_bad : go on past frames whose input is bad (listed in ``skipped.csv``).
-    progress : show a progress bar.
-    on_start : called with (frames selected, frames already done, frames without labels) before
-        the work starts (the CLI prints a line).
-    on_estimate : called with a line estimating the run's duration, measured on its first
-        :data:`CALIBRATION_FRAMES` frames, before the others start.
-    semantics : ``"none"`` (class-agnostic panoptic quality only) or ``"oracle"`` (also per class
-        with ground-truth semantics: what ``flic segment --semantics oracle`` writes, scored as
-        semantic-kitti-api scores it).
-    runtimes : a ``flic benchmark`` ``summary.csv`` whose median times go into
-        ``quality_speed.csv`` instead of the times measured by this run.
+    spec : what to evaluate and how (:class:`flic_cli.runs.spec.EvaluateRun`; the selection's
+        setting ``"no-ground"``, ``"ground"`` or ``"both"``, default ``"both"``; its ground
+        remover defaults to ``"paper"``, the protocol's).
 
     Raises
     ------
     FlicInputError
         On bad input: unknown setting or method, missing labels, a bad frame (without
-        ``skip_bad``), an ``out`` folder that cannot be used or holds another run.
+        ``skip_bad``) or every frame bad (with ``skip_bad``), an ``out`` folder that cannot be
+        used, holds another run or is in use by a run still going (``out`` is locked for the
+        run, :func:`flic_cli.io.atomic.locked_folder`).
     """
+    sel = spec.selection
+    config = sel.loaded_config()
+    setting = sel.setting_or("both")
+    ground_remover = sel.remover_or("paper")
+    semantics, jobs, scheduler = spec.semantics, sel.jobs, spec.scheduler
+    skip_bad, progress = sel.skip_bad, sel.progress
     # 1. what to evaluate, where to write
     if setting not in EVAL_SETTINGS:
         raise FlicInputError(None, f"--setting must be one of {', '.join(EVAL_SETTINGS)}")
     if semantics not in ("none", "oracle"):
         raise FlicInputError(None, f"--semantics must be none or oracle, got {semantics!r}")
-    bench = None if runtimes is None else read_runtimes(Path(runtimes))
+    check_scheduler(spec.scheduler)
+    bench = None if spec.runtimes is None else read_runtimes(Path(spec.runtimes))
     settings = EVAL_SETTINGS[setting]
-    methods = list(dict.fromkeys(methods))
-    refs, missing, folders = select_labelled(data, sequences, frames, skip_missing)
-    out = check_output_dir(Path(out), folders)
+    methods = list(dict.fromkeys(spec.methods))
+    ds, refs, missing = select_labelled(sel.data, sel.sequences, sel.frames, spec.skip_missing)
+    out = check_output_dir(Path(spec.out), ds.folders())
     # 2. the segmenters, built once and sent to every worker
     job = ScoreJob(
+        ds,
         tuple((s, tuple(build_segmenters(config, methods, s, ground_remover))) for s in settings),
         config.projection,
         oracle=semantics == "oracle",
     )
     # 3. the resumable store
-    params = run_parameters(data, config, methods, settings, ground_remover, sequences, frames)
+    params = run_parameters(
+        sel.data, config, methods, settings, ground_remover, sel.sequences, sel.frames
+    )
     params["semantics"] = semantics
-    done = open_store(out, params, resume)
+    kinds = ("objects", "ground") + (("panoptic",) if spec.semantics == "oracle" else ())
+    done = open_store(out, params, spec.resume, kinds)
     todo = [r for r in refs if (r.sequence, r.frame) not in done]
     resumed = len(refs) - len(todo)
-    if on_start is not None:
-        on_start(len(refs), resumed, missing)
+    if spec.on_start is not None:
+        spec.on_start(len(refs), resumed, missing)
     # 4. score every frame, storing each as it finishes; the first few in this process, timed,
     #    for an estimate of the whole run before the rest starts
     parts = out / PARTS
@@ -316,10 +294,12 @@ def run_evaluate(
             timing.append((time.perf_counter() - start, scores))
             write_part(parts, ref.sequence, ref.frame, scores.tables())
             start = time.perf_counter()
-        if timing and rest and on_estimate is not None:
-            on_estimate(estimate_line(timing, len(rest), jobs, scheduler))
+        if timing and rest and spec.on_estimate is not None:
+            spec.on_estimate(estimate_line(timing, len(rest), jobs, scheduler))
         for ref, scores in loops[1]:
             write_part(parts, ref.sequence, ref.frame, scores.tables())
+    except SchedulerError:
+        raise  # not a bad frame: the hint below does not apply
     except FlicInputError as exc:
         raise FlicInputError(
             exc.path,
@@ -327,6 +307,13 @@ def run_evaluate(
             "on past bad frames)",
         ) from None
     skipped = loops[0].skipped + loops[1].skipped
+    if skipped and len(skipped) == len(refs):
+        write_skipped(out / "skipped.csv", sort_skipped(skipped))
+        raise FlicInputError(
+            sel.data,
+            f"every selected frame is bad ({len(skipped)}, listed in {out / 'skipped.csv'}): "
+            "nothing to evaluate",
+        )
     # 5. the tables, from the stored records of the selected frames
     bad = {(s.sequence, s.frame) for s in skipped}
     keys = [(r.sequence, r.frame) for r in refs if (r.sequence, r.frame) not in bad]

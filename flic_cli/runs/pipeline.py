@@ -15,14 +15,15 @@ from typing import Any
 
 import numpy as np
 
+from flic_cli import registry
 from flic_cli.classes import ground_mask
+from flic_cli.component import check_installed
 from flic_cli.config import Config
-from flic_cli.config.component import check_installed
 from flic_cli.errors import FlicInputError
-from flic_cli.ground.base import Ground, extract_ground
+from flic_cli.ground.base import Ground
 from flic_cli.io.base import Frame, FrameRef
 from flic_cli.projection import Projection
-from flic_cli.range_image import RangeImage
+from flic_cli.range_image import RangeImage, sensor_subset
 
 #: The paper's two settings: each method after ground extraction (no labels used), or with the
 #: ground classes' points removed by label first.
@@ -101,12 +102,7 @@ def prepare(
     if frame.image is not None and keep is None:
         image = frame.image
     elif frame.image is not None:  # a sensor image with some points removed
-        pix = frame.image.point_pixel[keep]
-        ranges = np.zeros(frame.image.ranges.size, dtype=np.float32)
-        ranges[pix] = frame.image.ranges.reshape(-1)[pix]
-        image = RangeImage(
-            ranges.reshape(frame.image.ranges.shape), frame.image.elevation, pix, "native"
-        )
+        image = sensor_subset(frame.image, keep)
     else:
         image = projection(points, keep)
         if projection.mode == "rings" and image.projection == "spherical":
@@ -125,21 +121,20 @@ def scan_semantics(frame: Frame, semantics: str) -> np.ndarray:
 
     Parameters
     ----------
-    frame : a SemanticKITTI frame (with labels for ``"oracle"``).
+    frame : a frame of a dataset with ``point_semantics`` (with labels for ``"oracle"``).
     semantics : ``"oracle"`` (the ground truth's classes) or a folder of a semantic network's
         predictions (see :mod:`flic_cli.semantics`).
     """
-    from flic_cli.io import read_label
-    from flic_cli.semantics import oracle_semantics, read_semantics
+    from flic_cli.io.semantickitti import read_semantics
+    from flic_cli.semantics import oracle_semantics
 
     ref = frame.ref
     if semantics != "oracle":
         return read_semantics(semantics, ref.sequence, ref.frame, frame.n_read)
-    if frame.labels is None or ref.label_path is None:
+    labels = frame.labels_as_stored()  # the dropped points' too
+    if labels is None:
         raise FlicInputError(ref.path, "--semantics oracle needs the frame's labels")
-    if frame.finite is None:
-        return oracle_semantics(frame.labels)
-    return oracle_semantics(read_label(ref.label_path, frame.n_read))  # dropped points too
+    return oracle_semantics(labels)
 
 
 def prepare_semantic(frame: Frame, semantics: np.ndarray, projection: Projection) -> Prepared:
@@ -179,7 +174,7 @@ def segment_with(
     method: Any,
     image: RangeImage,
     points: np.ndarray,
-    ground: np.ndarray | None,
+    ground: Ground | None,
     semantics: np.ndarray | None = None,
 ) -> np.ndarray:
     """``method.segment(image, points, ground)``, with ``semantics`` ((N,) raw class of every
@@ -205,10 +200,10 @@ def prepared_semantics(prep: Prepared, semantics: np.ndarray | None = None) -> n
 def cluster_ground(
     method: Any, points: np.ndarray, ground: Ground, semantics: np.ndarray | None = None
 ) -> np.ndarray:
-    """``method``'s per-point labels after a ground step (:func:`extract_ground`): on the image
-    it leaves, without its ground and held cells (whose points take the cluster of the cell
-    standing on them, ``ground.image.attached``)."""
-    return segment_with(method, ground.image, points, ground.left_out, semantics)
+    """``method``'s per-point labels after a ground step (``remover.extract``): on the image it
+    leaves, without its ground and held cells (whose points take the cluster of the cell
+    standing on them, ``ground.attached``)."""
+    return segment_with(method, ground.image, points, ground, semantics)
 
 
 @dataclass(frozen=True)
@@ -233,9 +228,10 @@ class Segmenter:
     remover: Any
 
     def ground_step(self, image: RangeImage, points: np.ndarray) -> Ground | None:
-        """The remover's decision as the clusterers take it (:func:`extract_ground`), or None
-        when there is no remover."""
-        return None if self.remover is None else extract_ground(self.remover, image, points)
+        """The remover's decision as the clusterers take it
+        (:meth:`flic_cli.ground.base.GroundRemover.extract`), or None when there is no
+        remover."""
+        return None if self.remover is None else self.remover.extract(image, points)
 
     def cluster(
         self,
@@ -266,7 +262,7 @@ class Segmenter:
 
     def with_param(self, value: float) -> Segmenter:
         """The same segmenter with the method's main parameter (sweeps) set to ``value``."""
-        from flic_cli.config.component import describe
+        from flic_cli.component import describe
 
         param = self.method.main_param
         try:
@@ -296,10 +292,14 @@ def build_segmenter(
     """
     spec = config.method(name)
     check_setting(setting)
+    if spec.kind in registry.METHODS:
+        registry.check_installed(f"method {name!r}", registry.METHODS[spec.kind])
     check_installed(spec.method)
     if setting == "no-ground":
         return Segmenter(name, spec.kind, spec.method, None, None)
     remover = spec.ground if ground_remover == OWN else ground_remover
+    if remover in registry.REMOVERS:
+        registry.check_installed(f"ground remover {remover!r}", registry.REMOVERS[remover])
     check_installed(config.remover(remover))
     return Segmenter(name, spec.kind, spec.method, remover, config.remover(remover))
 

@@ -19,8 +19,7 @@ import numpy as np
 from flic_cli.classes import class_name
 from flic_cli.errors import FlicInputError
 from flic_cli.ground.base import Ground
-from flic_cli.io import read_label, read_scan
-from flic_cli.io.base import Frame, FrameRef
+from flic_cli.io.base import Dataset, Frame, FrameRef
 from flic_cli.metrics import distance_band, score_frame
 from flic_cli.metrics.entropy import object_ids, segmentation_entropy
 from flic_cli.metrics.ground import ground_counts
@@ -127,22 +126,22 @@ class FrameScores:
         return out
 
 
-def load_labelled_frame(ref: FrameRef) -> Frame:
-    """Read a SemanticKITTI frame with its labels from its reference alone (in a worker).
+def load_labelled_frame(dataset: Dataset, ref: FrameRef) -> Frame:
+    """Read a frame with its ground-truth labels through its dataset (in a worker).
 
     Raises
     ------
     FlicInputError
-        When the frame is not a SemanticKITTI scan with a ``.label`` file, or cannot be read.
+        When the frame has no labels, or cannot be read.
     """
-    if ref.format != "semantickitti" or ref.label_path is None:
+    frame = dataset.load(ref)
+    if frame.labels is None:
         raise FlicInputError(
             ref.path,
-            "has no ground-truth labels: evaluation needs labelled SemanticKITTI data "
-            "(labels/<frame>.label)",
+            "has no ground-truth labels: evaluation needs labelled data (e.g. SemanticKITTI "
+            "labels/<frame>.label)",
         )
-    scan = read_scan(ref.path, ref.label_path)
-    return Frame(ref, scan.points, scan.labels, finite=scan.finite)
+    return frame
 
 
 @dataclass(frozen=True)
@@ -151,6 +150,7 @@ class ScoreJob:
 
     Attributes
     ----------
+    dataset : the frames' dataset (they are read through it).
     segmenters : per setting (``"no-ground"``, ``"ground"``), the segmenters to run.
     projection : how scans become range images.
     oracle : also score every method with oracle semantics: its clusters of the ground truth's
@@ -158,12 +158,13 @@ class ScoreJob:
         ``flic segment --semantics oracle`` (:func:`flic_cli.metrics.panoptic.panoptic_counts`).
     """
 
+    dataset: Dataset
     segmenters: tuple[tuple[str, tuple[Segmenter, ...]], ...]
     projection: Projection
     oracle: bool = False
 
     def __call__(self, ref: FrameRef) -> FrameScores:
-        frame = load_labelled_frame(ref)
+        frame = load_labelled_frame(self.dataset, ref)
         out = FrameScores(ref.sequence, ref.frame)
         for setting, segmenters in self.segmenters:
             prep = prepare(frame, setting, self.projection)
@@ -194,7 +195,8 @@ def oracle_panoptic(
     from flic_cli.semantics import combine
 
     semantics = scan_semantics(frame, "oracle")
-    gt = semantics_labels(frame)
+    gt = frame.labels_as_stored()
+    assert gt is not None  # load_labelled_frame guarantees labels
     prep = prepare_semantic(frame, semantics, projection)
     rows: dict[str, list] = {c: [] for c in PANOPTIC_COLUMNS}
     for seg in segmenters:
@@ -210,14 +212,6 @@ def oracle_panoptic(
         for key, values in counts.as_dict().items():
             rows[key] += values.tolist()
     return rows
-
-
-def semantics_labels(frame: Frame) -> np.ndarray:
-    """The ground-truth labels of every point of the scan as stored (NaN points included)."""
-    assert frame.labels is not None and frame.ref.label_path is not None
-    if frame.finite is None:
-        return frame.labels
-    return read_label(frame.ref.label_path, frame.n_read)
 
 
 class GroundCache:

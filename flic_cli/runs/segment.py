@@ -15,13 +15,14 @@ clustering), without a ground remover.
 
 from __future__ import annotations
 
+import time
+from contextlib import ExitStack
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from flic_cli.config import Config
 from flic_cli.errors import FlicInputError
 from flic_cli.ground.base import Ground
 from flic_cli.io import open_dataset
@@ -29,9 +30,11 @@ from flic_cli.io.atomic import staged_folder
 from flic_cli.io.base import FrameRef
 from flic_cli.io.ply import write_ply
 from flic_cli.projection import Projection
+from flic_cli.runs import latency
 from flic_cli.runs.frames import FrameLoop, Skipped, sort_skipped, write_skipped
-from flic_cli.runs.output import check_output_dir
+from flic_cli.runs.output import check_output_dir, holding_out_lock
 from flic_cli.runs.pipeline import (
+    OWN,
     Prepared,
     Segmenter,
     build_segmenter,
@@ -41,12 +44,16 @@ from flic_cli.runs.pipeline import (
     scan_semantics,
     segment_with,
 )
+from flic_cli.runs.spec import SegmentRun
 
 #: ``--semantics`` values besides a folder of a semantic network's predictions.
 SEMANTICS = ("none", "oracle")
 
-#: ``--export`` formats.
-EXPORTS = ("ply",)
+#: ``--export`` formats (``mcap`` / ``bag``: a ROS 2 bag of PointCloud2 clusters, bag input only).
+EXPORTS = ("ply", "mcap", "bag")
+
+#: Formats whose frames are revolutions of a recording: the run reports the latency per frame.
+STREAMS = latency.STREAMS
 
 
 @dataclass
@@ -65,6 +72,8 @@ class Segmented:
     labels: np.ndarray
     ground: Ground | None
     semantics: np.ndarray | None = None
+    extra: dict[str, Any] | None = None
+    latency_ms: float = 0.0
 
     @property
     def clusters(self) -> int:
@@ -93,18 +102,22 @@ class SegmentJob:
     semantics: str | None = None
 
     def __call__(self, ref: FrameRef) -> Segmented:
+        start = time.perf_counter()  # latency: decode + range image + ground + cluster
         frame = self.dataset.load(ref)
+        extra = frame.export_fields() if hasattr(frame, "export_fields") else None
         if self.semantics is None:
             prep = prepare(frame, self.setting, self.projection)
             labels, ground = self.segmenter.run(prep.image, prep.points)
-            return Segmented(prep, labels, ground)
+            ms = (time.perf_counter() - start) * 1e3
+            return Segmented(prep, labels, ground, extra=extra, latency_ms=ms)
         semantics = scan_semantics(frame, self.semantics)
         prep = prepare_semantic(frame, semantics, self.projection)
         labels = segment_with(
             self.segmenter.method, prep.image, prep.points, None,
             prepared_semantics(prep, semantics),
         )  # fmt: skip
-        return Segmented(prep, labels, None, semantics)
+        ms = (time.perf_counter() - start) * 1e3
+        return Segmented(prep, labels, None, semantics, extra=extra, latency_ms=ms)
 
 
 @dataclass
@@ -119,6 +132,8 @@ class SegmentSummary:
     fallbacks: int = 0
     skipped: list[Skipped] = field(default_factory=list)
     renders: list[Path] = field(default_factory=list)
+    latency: str | None = None
+    exports: list[Path] = field(default_factory=list)
 
     def line(self) -> str:
         text = (
@@ -130,75 +145,65 @@ class SegmentSummary:
             text += f", {self.fallbacks} frame(s) projected spherically (ring recovery failed)"
         if self.skipped:
             text += f", skipped {len(self.skipped)} bad frame(s) (skipped.csv)"
+        if self.latency:
+            text += f"; {self.latency}"
         return f"{text} -> {self.out}"
 
 
-def run_segment(
-    data: Path,
-    out: Path,
-    method: str,
-    config: Config,
-    setting: str = "ground",
-    sequences: list[str] | None = None,
-    frames: tuple[int | None, int | None] | None = None,
-    ground_remover: str = "own",
-    render: int | None = None,
-    jobs: int = 1,
-    skip_bad: bool = False,
-    progress: bool = True,
-    semantics: str = "none",
-    export: tuple[str, ...] = (),
-) -> SegmentSummary:
-    """Segment every selected frame and write ``<out>/sequences/NN/predictions/XXXXXX.label``.
+@holding_out_lock
+def run_segment(spec: SegmentRun) -> SegmentSummary:
+    """Segment every selected frame and write its prediction in the data format's own encoding
+    (SemanticKITTI ``<out>/sequences/NN/predictions/XXXXXX.label``).
 
     Parameters
     ----------
-    data : dataset root, sequence folder or Moosmann log.
-    out : output root.
-    method : method variant name (``flic14``, ``bogoslavskyi``, ...).
-    config : loaded config.
-    setting : ``"ground"`` or ``"no-ground"``.
-    ground_remover : ``"own"`` or a remover's name (see
-        :func:`flic_cli.runs.pipeline.build_segmenter`).
-    render : if set, also draw this frame number (which must be among the selected frames):
-        ``<out>/render_<seq>_<frame>.png`` (the range image) and ``<out>/views_<seq>_<frame>.png``
-        (bird's-eye and oblique 3D views; with labels, ground truth beside the prediction with
-        missed, split and merged objects marked).
-    jobs : processes (see :func:`flic_cli.runs.parallel.imap_frames`).
-    skip_bad : go on past frames whose input is bad (listed in ``skipped.csv``).
-    progress : show a progress bar.
-    semantics : ``"none"``, ``"oracle"`` (ground-truth classes) or a folder of a semantic
-        network's predictions (``DIR/sequences/NN/predictions/XXXXXX.label``).
-    export : per-frame exports besides the predictions: ``"ply"`` (a PLY point cloud with
-        cluster ids and colours, :func:`flic_cli.io.ply.write_ply`).
+    spec : what to segment and how (:class:`flic_cli.runs.spec.SegmentRun`; the selection's
+        setting defaults to ``"ground"``, its ground remover to ``"own"``).
 
     Raises
     ------
     FlicInputError
         On bad input, before any work where it can be known (data, options, ``out``).
     """
-    wanted = _semantics_mode(semantics)
+    sel = spec.selection
+    config = sel.loaded_config()
+    setting = sel.setting_or("ground")
+    method, render, export = spec.method, spec.render, spec.export
+    wanted = _semantics_mode(spec.semantics)
     bad_export = [e for e in export if e not in EXPORTS]
     if bad_export:
         raise FlicInputError(None, f"--export {bad_export[0]}: one of {', '.join(EXPORTS)}")
     ds = open_dataset(
-        data, sequences, frames, require_labels=setting == "no-ground" or wanted == "oracle"
+        sel.data,
+        sel.sequences,
+        sel.frames,
+        require_labels=setting == "no-ground" or wanted == "oracle",
     )
-    if wanted is not None and ds.format != "semantickitti":
-        raise FlicInputError(data, "--semantics needs SemanticKITTI data (a scan's points)")
+    if wanted is not None and not ds.point_semantics:
+        raise FlicInputError(
+            sel.data, f"--semantics: {ds.format} predictions carry no semantic classes per point"
+        )
     refs = ds.refs()
-    out = check_output_dir(Path(out), ds.folders())
+    out = check_output_dir(Path(spec.out), ds.folders())
     if render is not None and render not in {r.frame for r in refs}:
         shown = sorted({r.frame for r in refs})
         span = f"{shown[0]}..{shown[-1]}" if len(shown) > 1 else str(shown[0])
         raise FlicInputError(None, f"--render {render}: no such frame among the selected ({span})")
-    seg = build_segmenter(config, method, setting, ground_remover)
+    bag_exports = [e for e in export if e in ("mcap", "bag")]
+    if bag_exports and ds.format != "bag":
+        raise FlicInputError(sel.data, f"--export {bag_exports[0]} needs a bag or MCAP input")
+    seg = build_segmenter(config, method, setting, sel.remover_or(OWN))
     job = SegmentJob(ds, seg, setting, config.projection, wanted)
-    loop = FrameLoop(job, refs, jobs, None, skip_bad, f"segment {method}", progress)
+    loop = FrameLoop(job, refs, sel.jobs, None, sel.skip_bad, f"segment {method}", sel.progress)
     n_points = n_clusters = owned = pixels = fallbacks = 0
     renders = []
-    with staged_folder(out) as stage:
+    latencies: list[float] = []
+    with staged_folder(out) as stage, ExitStack() as writers:
+        bag_writers = [_bag_writer(writers, stage, ds, e, wanted is not None) for e in bag_exports]
         for ref, result in loop:
+            latencies.append(result.latency_ms)
+            for w in bag_writers:
+                _write_cloud(w, result)
             prep = result.prep
             ds.write_prediction(
                 stage, ref, prep.scan_labels(result.labels), prep.image, result.semantics
@@ -225,6 +230,7 @@ def run_segment(
                 )
         if loop.skipped:
             write_skipped(stage / "skipped.csv", sort_skipped(loop.skipped))
+        writers.close()  # the bags are complete before the stage moves into place
     done = len(refs) - len(loop.skipped)
     return SegmentSummary(
         done,
@@ -235,6 +241,41 @@ def run_segment(
         fallbacks,
         sort_skipped(loop.skipped),
         [out / name for name in renders],
+        latency_line(latencies) if ds.format in STREAMS and latencies and sel.jobs == 1 else None,
+        [out / w.path.name for w in bag_writers],
+    )
+
+
+def latency_line(latencies_ms: list[float]) -> str:
+    """The run's latency per revolution (:func:`flic_cli.runs.latency.summary_line`)."""
+    from flic_cli.runs.latency import summary_line
+
+    return summary_line("segment", np.asarray(latencies_ms))
+
+
+def _bag_writer(stack: ExitStack, stage: Path, ds: Any, storage: str, with_label: bool) -> Any:
+    """An open :class:`flic_cli.io.bag_writer.CloudBagWriter` for ``--export mcap|bag``."""
+    from flic_cli.io.bag_writer import CloudBagWriter, export_folder
+
+    path = export_folder(stage, ds.root, storage)
+    return stack.enter_context(CloudBagWriter(path, storage, "/flic/clusters", with_label))
+
+
+def _write_cloud(writer: Any, result: Segmented) -> None:
+    """One frame's PointCloud2 of clusters, with the input's stamp and frame id."""
+    extra = result.extra or {}
+    label = None
+    if writer.with_label and result.semantics is not None:
+        sem = result.semantics
+        keep = result.prep.keep
+        label = sem if keep is None else sem[keep]
+    writer.write(
+        int(extra.get("stamp_ns", 0)),
+        str(extra.get("frame_id", "")),
+        result.prep.points,
+        result.labels,
+        extra.get("intensity"),
+        label,
     )
 
 

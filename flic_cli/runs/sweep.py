@@ -14,39 +14,19 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from flic_cli.config import Config
 from flic_cli.errors import FlicInputError
 from flic_cli.io.atomic import write_table
-from flic_cli.io.base import FrameRef
+from flic_cli.io.base import Dataset, FrameRef
 from flic_cli.metrics import match_objects, summarize
 from flic_cli.projection import Projection
 from flic_cli.runs.evaluate import select_labelled
 from flic_cli.runs.frames import FrameLoop, Skipped, sort_skipped, write_skipped
-from flic_cli.runs.output import check_output_dir
-from flic_cli.runs.pipeline import (
-    Segmenter,
-    build_segmenter,
-    check_setting,
-    prepare,
-    prepared_semantics,
-)
+from flic_cli.runs.output import check_output_dir, holding_out_lock
+from flic_cli.runs.parallel import check_scheduler
+from flic_cli.runs.pipeline import Segmenter, build_segmenter, prepare, prepared_semantics
 from flic_cli.runs.scoring import load_labelled_frame
+from flic_cli.runs.spec import SweepRun
 from flic_cli.runs.tables import percent
-
-#: Default sweep range ``(from, to, step)`` of each method kind's main parameter.
-DEFAULT_RANGES: dict[str, tuple[float, float, float]] = {
-    "flic": (0.2, 1.5, 0.05),
-    "bogoslavskyi": (2.0, 30.0, 1.0),
-    "dbscan": (0.2, 1.5, 0.1),
-    "bridge": (0.2, 1.0, 0.05),
-}
-
-#: Axis labels of the main parameters.
-PARAM_LABELS: dict[str, str] = {
-    "threshold_m": "distance threshold [m]",
-    "angle_deg": "angle threshold beta [deg]",
-    "eps_m": "DBSCAN eps [m]",
-}
 
 #: Columns of ``sweep.csv`` (scores in percent).
 SWEEP_COLUMNS: tuple[str, ...] = (
@@ -69,8 +49,12 @@ def sweep_values(start: float, stop: float, step: float) -> np.ndarray:
     Raises
     ------
     FlicInputError
-        When ``step <= 0``, ``stop < start``, a value is not positive, or there are too many.
+        When a bound is not finite (nan, inf), ``step <= 0``, ``stop < start``, a value is not
+        positive, or there are too many.
     """
+    for name, value in (("--from", start), ("--to", stop), ("--step", step)):
+        if not np.isfinite(value):
+            raise FlicInputError(None, f"{name} must be a finite number, got {value}")
     if not step > 0:
         raise FlicInputError(None, f"--step must be positive, got {step}")
     if stop < start:
@@ -90,12 +74,13 @@ class SweepJob:
     Called on a frame, returns the per-object IoUs, shape ``(values, objects)``.
     """
 
+    dataset: Dataset
     segmenters: tuple[Segmenter, ...]
     setting: str
     projection: Projection
 
     def __call__(self, ref: FrameRef) -> np.ndarray:
-        prep = prepare(load_labelled_frame(ref), self.setting, self.projection)
+        prep = prepare(load_labelled_frame(self.dataset, ref), self.setting, self.projection)
         ground = self.segmenters[0].ground_step(prep.image, prep.points)
         classes = prepared_semantics(prep)  # the ground truth's, for methods that need them
         rows = [
@@ -139,64 +124,53 @@ class SweepResult:
         )
 
 
-def run_sweep(
-    data: Path,
-    out: Path,
-    method: str,
-    config: Config,
-    start: float | None = None,
-    stop: float | None = None,
-    step: float | None = None,
-    setting: str = "no-ground",
-    sequences: list[str] | None = None,
-    frames: tuple[int | None, int | None] | None = None,
-    ground_remover: str = "paper",
-    jobs: int = 1,
-    scheduler: str | None = None,
-    skip_missing: bool = False,
-    skip_bad: bool = False,
-    progress: bool = True,
-) -> SweepResult:
-    """Sweep a method's main parameter and write ``sweep.csv`` and ``sweep.png`` into ``out``.
+@holding_out_lock
+def run_sweep(spec: SweepRun) -> SweepResult:
+    """Sweep a method's main parameter and write ``sweep.csv`` and ``sweep.png`` into
+    ``spec.out``.
 
     Parameters
     ----------
-    data : labelled SemanticKITTI root or sequence.
-    out : output folder.
-    method : method variant (``flic0``, ``bogoslavskyi``, ``dbscan``, ...).
-    config : loaded config.
-    start, stop, step : the values (defaults per method kind: :data:`DEFAULT_RANGES`).
-    setting : ``"no-ground"`` (default: isolates the clusterer) or ``"ground"``.
-    sequences, frames : selection.
-    ground_remover : ground extraction of the ground setting (a remover's name or ``"own"``).
-    jobs, scheduler : parallelism (see :func:`flic_cli.runs.parallel.imap_frames`).
-    skip_missing : leave out frames without ``.label`` instead of failing.
-    skip_bad : go on past frames whose input is bad (listed in ``skipped.csv``).
-    progress : show a progress bar.
+    spec : what to sweep and how (:class:`flic_cli.runs.spec.SweepRun`; the selection's setting
+        defaults to ``"no-ground"``, which isolates the clusterer, its ground remover to
+        ``"paper"``; the values default to the method class's ``sweep_range``).
     """
-    check_setting(setting)
-    base = build_segmenter(config, method, setting, ground_remover)
-    d_start, d_stop, d_step = DEFAULT_RANGES.get(
-        base.kind, getattr(base.method, "sweep_range", (None, None, None))
-    )
+    sel = spec.selection
+    config = sel.loaded_config()
+    setting = sel.setting_or("no-ground")
+    check_scheduler(spec.scheduler)
+    method, start, stop, step = spec.method, spec.start, spec.stop, spec.step
+    base = build_segmenter(config, method, setting, sel.remover_or("paper"))
+    d_start, d_stop, d_step = getattr(base.method, "sweep_range", (None, None, None))
     start = d_start if start is None else start
     stop = d_stop if stop is None else stop
     step = d_step if step is None else step
     if start is None or stop is None or step is None:
         raise FlicInputError(
-            None, f"method kind {base.kind!r} has no default range: give --from/--to/--step"
+            None,
+            f"method kind {base.kind!r} declares no sweep_range: give --from/--to/--step",
         )
     values = sweep_values(float(start), float(stop), float(step))
     param = base.method.main_param
     # every value is validated here, before any frame is read
-    job = SweepJob(tuple(base.with_param(float(v)) for v in values), setting, config.projection)
-    refs, missing, folders = select_labelled(data, sequences, frames, skip_missing)
-    out = check_output_dir(Path(out), folders)
+    segmenters = tuple(base.with_param(float(v)) for v in values)
+    ds, refs, missing = select_labelled(sel.data, sel.sequences, sel.frames, spec.skip_missing)
+    job = SweepJob(ds, segmenters, setting, config.projection)
+    out = check_output_dir(Path(spec.out), ds.folders())
 
     per_frame: dict[tuple[str, int], np.ndarray] = {}
-    loop = FrameLoop(job, refs, jobs, scheduler, skip_bad, f"sweep {method}", progress)
+    loop = FrameLoop(
+        job, refs, sel.jobs, spec.scheduler, sel.skip_bad, f"sweep {method}", sel.progress
+    )
     for ref, ious in loop:
         per_frame[(ref.sequence, ref.frame)] = ious
+    if loop.skipped and not per_frame:
+        write_skipped(out / "skipped.csv", sort_skipped(loop.skipped))
+        raise FlicInputError(
+            sel.data,
+            f"every selected frame is bad ({len(loop.skipped)}, listed in "
+            f"{out / 'skipped.csv'}): nothing to sweep",
+        )
 
     ordered = [per_frame[k] for k in ((r.sequence, r.frame) for r in refs) if k in per_frame]
     ious = np.hstack(ordered) if ordered else np.zeros((values.size, 0))
@@ -225,7 +199,7 @@ def run_sweep(
         table["p_mu"].to_numpy(),
         best,
         png_path,
-        xlabel=PARAM_LABELS.get(param, param),
+        xlabel=getattr(base.method, "sweep_label", param),
         title=f"{method}, {setting}: {len(per_frame)} frames, "
         f"{int(table['objects'].iloc[0])} objects",
     )

@@ -13,7 +13,7 @@ from typing import NamedTuple
 import numpy as np
 
 from flic_cli.io.moosmann import RANGE_SCALE
-from flic_cli.io.semantickitti import encode_labels
+from flic_cli.labels import encode
 from flic_cli.range_image import RangeImage, from_sensor_image
 from flic_cli.sample.scene import Box, Scene
 from flic_cli.sample.sensor import (
@@ -79,7 +79,7 @@ def render_kitti(
     )
     keep = (ranges > 0).reshape(-1)  # row-major = ring after ring, each ring counter-clockwise
     pts = np.concatenate([xyz.reshape(-1, 3), rem.reshape(-1, 1)], axis=1)[keep]
-    labels = encode_labels(sem.reshape(-1), inst.reshape(-1))
+    labels = encode(sem.reshape(-1), inst.reshape(-1))
     return pts.astype("<f4"), labels[keep].astype("<u4")
 
 
