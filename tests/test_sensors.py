@@ -292,7 +292,17 @@ def test_info_on_every_recording(
 ) -> None:
     code, out, err = _cli(["info", shared_data / SENSORS / path], capsys)
     assert code == 0, err
-    assert "beams x columns:" in out and "beam angles from:" in out and "coverage" in out
+    expect = {
+        OS2 + ".pcap": ("128 x 1024", "119,682", "metadata"),
+        OS1_PCAP: ("64 x 1024", "16,749", "metadata"),
+        VLP16: ("16 x 1848", "29,027", "decoder"),
+        HELIOS: ("16 x ", "15,258", "fields"),
+        NEBULA_PCD: ("16 x 1800", "14,831", "fields"),
+        NUSCENES: ("32 x 1084", "26,659 (of 34,688", "fields"),
+    }[path]
+    assert f"beams x columns: {expect[0]}" in out
+    assert f"points per frame: {expect[1]}" in out
+    assert f"beam angles from: {expect[2]}" in out and "projection coverage" in out
 
 
 def test_segment_writes_one_label_per_point(
@@ -407,6 +417,14 @@ def test_nuscenes_evaluate_scores_a_label_file(
     table = pd.read_csv(out / "per_object.csv")
     assert len(table) == big.size
     assert np.allclose(table["iou"], 1.0)
+    # sweep-threshold on the same labels: FLIC's own threshold gives IoU_mu 100 %
+    sweep = tmp_path / "sweep"
+    args = ["sweep-threshold", data, "--method", "flic", "--setting", "no-ground"]
+    code, _, err = _cli([*args, "--from", "0.5", "--to", "1.0", "--out", sweep], capsys)
+    assert code == 0, err
+    curve = pd.read_csv(sweep / "sweep.csv")
+    own = curve[np.isclose(curve["value"], 0.75)]
+    assert len(own) == 1 and float(own["iou_mu"].iloc[0]) == 100.0
 
 
 # ---------------------------------------------------------------------------------------------
@@ -749,6 +767,14 @@ def test_velodyne_32_beam_models_from_written_packets(
     el = np.arctan2(frame.points[:, 2], np.linalg.norm(frame.points[:, :2], axis=1))
     row = image.point_pixel // image.shape[1]
     assert np.abs(el - image.elevation[row]).max() < np.radians(0.3)
+    # every revolution as one pass of velodyne-decoder over the file gives it (2 complete ones
+    # and a remainder in 2.3 turns)
+    import velodyne_decoder as vd
+
+    scans = list(vd.read_pcap(str(d / "v32.pcap"), vd.Config(model=getattr(vd.Model, name))))
+    assert len(ds.refs()) == len(scans) - 1 == 2
+    for ref, scan in zip(ds.refs(), scans, strict=False):
+        np.testing.assert_array_equal(ds.load(ref).points, scan.points[:, :3])
 
 
 def test_organised_pcd_keeps_its_rows_and_columns(tmp_path: Path) -> None:

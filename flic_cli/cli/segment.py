@@ -108,19 +108,36 @@ def segment(
     typer.echo(summary.line())
 
 
-@app.command(epilog="Example: `flic sample /tmp/flic-sample --frames 50`")
+@app.command(
+    epilog="Examples: `flic sample /tmp/flic-sample --frames 50`, "
+    "`flic sample /tmp/vlp16 --sensor vlp16 --frames 10`"
+)
 @friendly_errors
 def sample(
     out: Annotated[Path, typer.Argument(help="Output folder.")],
     frames: Annotated[int, typer.Option("--frames", help="Number of frames (>= 1).")] = 20,
     seed: Annotated[int, typer.Option(help="Scene seed.")] = 0,
+    sensor: Annotated[
+        str,
+        typer.Option(
+            help="Sensor profile: vlp16, vlp32c, hdl32e, hdl64e (the default), os1-64, os1-128, "
+            "os2-128. Other than hdl64e: the SemanticKITTI sequence only, cast with that "
+            "sensor's beam table and columns, and OUT/sensor.toml, the `--config` that reads it."
+        ),
+    ] = "hdl64e",
 ) -> None:
     """Write the deterministic synthetic sample: a SemanticKITTI sequence (with labels) and the
     same scenes as a Moosmann-style log (16-bit PNG + img.cfg)."""
     from flic_cli.sample import write_sample
 
-    paths = write_sample(out, frames=frames, seed=seed)
-    typer.echo(f"wrote {frames} frames: {paths.kitti_root} and {paths.moosmann_log}")
+    paths = write_sample(out, frames=frames, seed=seed, sensor=sensor)
+    if paths.config is None:
+        typer.echo(f"wrote {frames} frames: {paths.kitti_root} and {paths.moosmann_log}")
+    else:
+        typer.echo(
+            f"wrote {frames} frames ({sensor}): {paths.kitti_root}; read it with "
+            f"--config {paths.config}"
+        )
 
 
 @app.command(

@@ -348,12 +348,14 @@ class OusterFrame:
     columns : (W,) bool, True for the columns received with valid status.
     fields : further (H, W) channel fields when asked for (``"reflectivity"``, ``"signal"``,
         ``"near_ir"``; those the profile has).
+    packets : the number of consecutive packets the frame was assembled from.
     """
 
     frame_id: int
     range_mm: np.ndarray
     columns: np.ndarray
     fields: dict[str, np.ndarray] = field(default_factory=dict)
+    packets: int = 0
 
     @property
     def complete(self) -> bool:
@@ -499,7 +501,7 @@ def _assemble(
                 img = np.zeros((h, w), dtype=f.dtype)
                 img[:, good] = f[valid].T
                 extra[name] = img
-    return OusterFrame(frame_id, out, columns, extra)
+    return OusterFrame(frame_id, out, columns, extra, len(batch))
 
 
 @njit(cache=True)
@@ -720,7 +722,7 @@ class OusterPcapDataset(SensorFileDataset):
             return True  # ambiguous metadata: ours, and opening says why
 
     def _open(self, path: Path) -> FileInfo:
-        from flic_cli.io.pcap import index_udp, read_payloads
+        from flic_cli.io.pcap import index_udp, iter_payloads
 
         meta_path = find_meta(path)
         if meta_path is None:
@@ -753,16 +755,18 @@ class OusterPcapDataset(SensorFileDataset):
                 f"holds no Ouster lidar packets of {meta.packet_size} bytes (profile "
                 f"{meta.profile}, {meta.beams} beams, metadata {meta_path.name}); it has {sizes}",
             )
-        payloads = read_payloads(index, lidar)
-        try:
-            frames = list(decode_frames(payloads, meta))
-        except OusterDataError as exc:
-            raise FlicInputError(path, f"{exc} (metadata {meta_path.name})") from None
         packets, points, partial = [], [], []
         start = 0
         max_mid = -1
-        for f in frames:
-            stop = start + _packets_of(payloads, start, f.frame_id, meta)
+        frames = decode_frames(iter_payloads(index, lidar), meta)  # one frame in memory at once
+        while True:
+            try:
+                f = next(frames)
+            except StopIteration:
+                break
+            except OusterDataError as exc:
+                raise FlicInputError(path, f"{exc} (metadata {meta_path.name})") from None
+            stop = start + f.packets
             if f.columns.any():
                 max_mid = max(max_mid, int(np.flatnonzero(f.columns).max()))
             if f.complete:
@@ -808,14 +812,6 @@ class OusterPcapDataset(SensorFileDataset):
         image, points = frame_image(frame, state.meta)
         ref = FrameRef(self.sequence_name(info.path), k, info.path, None, FORMAT, index=k)
         return Frame(ref, points, None, image)
-
-
-def _packets_of(payloads: list[bytes], start: int, frame_id: int, meta: OusterMeta) -> int:
-    """Number of consecutive packets from ``start`` with frame id ``frame_id``."""
-    n = 0
-    while start + n < len(payloads) and _frame_id(payloads[start + n], meta) == frame_id:
-        n += 1
-    return n
 
 
 def _counts(port: np.ndarray, size: np.ndarray) -> dict[tuple[int, int], int]:

@@ -229,3 +229,11 @@ def read_payloads(index: UdpIndex, which: np.ndarray) -> list[bytes]:
             out[wanted[k]] = udp[1]
         k += 1
     return out
+
+
+def iter_payloads(index: UdpIndex, which: np.ndarray, chunk: int = 2048) -> Iterator[bytes]:
+    """The payloads number ``which``, in that order, read ``chunk`` at a time (so that a long
+    capture is never held in memory at once)."""
+    which = np.asarray(which, dtype=np.int64)
+    for start in range(0, which.size, chunk):
+        yield from read_payloads(index, which[start : start + chunk])

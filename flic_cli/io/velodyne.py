@@ -21,10 +21,10 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+from numba import njit
 
 from flic_cli.errors import FlicInputError
 from flic_cli.io.base import Frame, FrameRef
-from flic_cli.io.rings import ring_image
 from flic_cli.io.sensor import FileInfo, SensorFileDataset, SensorModel
 from flic_cli.range_image import RangeImage
 
@@ -197,13 +197,25 @@ def decode_scans(
         if len(payload) != PACKET_SIZE:
             continue
         result = decoder.decode(float(stamp), payload, True)
-        if result is not None:
+        if result is not None:  # this packet completed the scan: the next one starts after it
             yield VelodyneScan(_stamp(result[0]), result[1], True, start, i)
-            start = i
+            start = i + 1
     if remainder:
         result = decoder.finish(True)
         if result is not None and len(result[1]):
             yield VelodyneScan(_stamp(result[0]), result[1], False, start, i)
+
+
+_SCAN_DECODERS: dict[tuple[str, str | None], object] = {}
+
+
+def _scan_decoder(sensor: VelodyneSensor):  # noqa: ANN202
+    """A velodyne-decoder ``ScanDecoder`` for the sensor, made once per process (making one
+    takes 0.2 ms)."""
+    key = (sensor.model, sensor.calibration_text)
+    if key not in _SCAN_DECODERS:
+        _SCAN_DECODERS[key] = _vd().ScanDecoder(sensor.config)
+    return _SCAN_DECODERS[key]
 
 
 def _stamp(pair: object) -> float:
@@ -230,15 +242,56 @@ def scan_image(points: np.ndarray, model: SensorModel) -> tuple[RangeImage, np.n
         xyz = np.ascontiguousarray(points.view(np.float32).reshape(len(points), -1)[:, :3])
     else:
         xyz = np.stack([points["x"], points["y"], points["z"]], axis=1).astype(np.float32)
-    col = points["column"].astype(np.int64)
-    width = int(col.max()) + 1 if col.size else 1
-    if col.size:
-        first = col == col.min()
-        az0 = float(np.arctan2(np.mean(xyz[first, 1]), np.mean(xyz[first, 0])))
-        shift = int(np.floor((np.pi - az0) / (2 * np.pi) * width)) - int(col.min())
-        col = (col + shift) % width
-    image = ring_image(xyz, points["ring"], col, width, model.elevation)
+    h = model.elevation.size
+    ranges, counts, pix, z, width = _firing_pixels(xyz, points["column"], points["ring"], h)
+    shape = (h, width)
+    image = RangeImage(
+        ranges.reshape(shape), model.elevation, pix, "rings", counts.reshape(shape),
+        z.reshape(shape), one_point_per_pixel=bool(np.count_nonzero(ranges) == pix.size),
+    )  # fmt: skip
     return image, xyz
+
+
+@njit(cache=True)
+def _firing_pixels(
+    xyz: np.ndarray, column: np.ndarray, ring: np.ndarray, h: int
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, int]:
+    """:func:`flic_cli.io.rings.ring_image`'s pixels for a decoded scan in one kernel: W = the
+    firings (``column.max() + 1``), the firings rolled so that the first one's mean azimuth
+    lands in its nominal column, row ``h - 1 - ring``; the nearest return of a pixel wins."""
+    n = xyz.shape[0]
+    lo, hi = 1 << 30, -1
+    for i in range(n):
+        c = np.int64(column[i])
+        lo = min(lo, c)
+        hi = max(hi, c)
+    width = hi + 1 if n else 1
+    sx, sy = 0.0, 0.0
+    for i in range(n):
+        if column[i] == lo:
+            sx += xyz[i, 0]
+            sy += xyz[i, 1]
+    shift = 0
+    if n:
+        az0 = np.arctan2(sy, sx)
+        shift = np.int64(np.floor((np.pi - az0) / (2.0 * np.pi) * width)) - lo
+    ranges = np.zeros(h * width, dtype=np.float32)
+    counts = np.zeros(h * width, dtype=np.int32)
+    z = np.zeros(h * width, dtype=np.float32)
+    pix = np.empty(n, dtype=np.int64)
+    for i in range(n):
+        x = np.float64(xyz[i, 0])
+        y = np.float64(xyz[i, 1])
+        zz = np.float64(xyz[i, 2])
+        r = np.float32(np.sqrt(x * x + y * y + zz * zz))
+        c = (np.int64(column[i]) + shift) % width
+        p = (h - 1 - np.int64(ring[i])) * width + c
+        if ranges[p] == 0.0 or r < ranges[p]:
+            ranges[p] = r
+            z[p] = np.float32(zz)
+        counts[p] += 1
+        pix[i] = p
+    return ranges, counts, pix, z, width
 
 
 # ---------------------------------------------------------------------------------------------
@@ -277,13 +330,14 @@ class VelodynePcapDataset(SensorFileDataset):
         return is_capture(path) and not OusterPcapDataset.accepts(path)
 
     def _open(self, path: Path) -> FileInfo:
-        from flic_cli.io.pcap import index_udp, read_payloads
+        from flic_cli.io.pcap import index_udp, iter_payloads, read_payloads
 
         index = index_udp(path)
         data = np.flatnonzero(index.size == PACKET_SIZE)
-        payloads = read_payloads(index, data)
-        keep = [i for i, p in enumerate(payloads) if is_data_packet(p)]
-        if not keep:
+        first = next(
+            (p for p in read_payloads(index, data[:64]) if is_data_packet(p)), None
+        )  # the model is read from the first data packet
+        if first is None:
             sizes = sorted(set(index.size.tolist()))[:6]
             raise FlicInputError(
                 path,
@@ -292,15 +346,23 @@ class VelodynePcapDataset(SensorFileDataset):
                 + (f" (sizes {', '.join(map(str, sizes))} bytes)" if sizes else "")
                 + ", and no Ouster metadata JSON beside it",
             )
-        data = data[keep]
-        payloads = [payloads[i] for i in keep]
-        sensor = detect_sensor(payloads, path)
+        sensor = detect_sensor([first], path)
+        kept: list[int] = []
+
+        def packets() -> Iterator[tuple[float, bytes]]:  # data packets, read a chunk at a time
+            stamps = index.time[data].tolist()
+            for k, payload in enumerate(iter_payloads(index, data)):
+                if is_data_packet(payload):
+                    kept.append(k)
+                    yield stamps[k], payload
+
         scans, partial = [], []
-        for scan in decode_scans(zip(index.time[data].tolist(), payloads, strict=True), sensor):
+        for scan in decode_scans(packets(), sensor):  # one scan in memory at once
             if scan.complete:
                 scans.append((scan.first_packet, scan.last_packet, len(scan.points)))
             else:
                 partial.append(f"remainder of {len(scan.points):,} points")
+        data = data[np.array(kept, dtype=np.int64)]
         if not scans:
             raise FlicInputError(
                 path, f"has no complete revolution ({'; '.join(partial) or 'no points'})"
@@ -317,17 +379,23 @@ class VelodynePcapDataset(SensorFileDataset):
 
     @staticmethod
     def _scan(state: _PcapState, k: int, path: Path) -> VelodyneScan:
+        """Revolution ``k``: velodyne-decoder's ``ScanDecoder`` over exactly the packets the
+        stream decoder put into it when the file was opened (the same points, checked by
+        ``test_velodyne_load_equals_one_decoding_pass``), one C++ call."""
         from flic_cli.io.pcap import read_payloads
 
+        vd = _vd()
         first, last, n = state.scans[k]
         which = state.data[first : last + 1]
         payloads = read_payloads(state.index, which)  # type: ignore[arg-type]
         stamps = state.index.time[which].tolist()  # type: ignore[attr-defined]
-        for scan in decode_scans(zip(stamps, payloads, strict=True), state.sensor, False):
-            if len(scan.points) != n:
-                break
-            return scan
-        raise FlicInputError(path, f"frame {k} decodes differently than when it was opened")
+        packets = vd.PacketVector(
+            [vd.VelodynePacket(t, p) for t, p in zip(stamps, payloads, strict=True)]
+        )
+        stamp, points = _scan_decoder(state.sensor).decode(packets, True)
+        if len(points) != n:
+            raise FlicInputError(path, f"frame {k} decodes differently than when it was opened")
+        return VelodyneScan(_stamp(stamp), points, True, first, last)
 
     def _first_width(
         self, index: object, data: np.ndarray, scan: tuple[int, int, int], sensor: VelodyneSensor

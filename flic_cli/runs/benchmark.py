@@ -78,7 +78,7 @@ from flic_cli.projection import Projection
 from flic_cli.runs import latency
 from flic_cli.runs.environment import collect_environment, environment_line, thread_limits
 from flic_cli.runs.frames import FrameLoop, sort_skipped, write_skipped
-from flic_cli.runs.output import check_output_dir
+from flic_cli.runs.output import check_output_dir, holding_out_lock
 from flic_cli.runs.pipeline import Segmenter, build_segmenters, prepare
 from flic_cli.runs.spec import BenchmarkRun
 
@@ -393,6 +393,7 @@ class BenchJob:
         ]
 
 
+@holding_out_lock
 def run_benchmark(spec: BenchmarkRun) -> BenchmarkResult:
     """Time every method on every selected frame and write the tables, plots and environment.
 

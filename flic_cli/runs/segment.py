@@ -32,7 +32,7 @@ from flic_cli.io.ply import write_ply
 from flic_cli.projection import Projection
 from flic_cli.runs import latency
 from flic_cli.runs.frames import FrameLoop, Skipped, sort_skipped, write_skipped
-from flic_cli.runs.output import check_output_dir
+from flic_cli.runs.output import check_output_dir, holding_out_lock
 from flic_cli.runs.pipeline import (
     OWN,
     Prepared,
@@ -145,6 +145,7 @@ class SegmentSummary:
         return f"{text} -> {self.out}"
 
 
+@holding_out_lock
 def run_segment(spec: SegmentRun) -> SegmentSummary:
     """Segment every selected frame and write its prediction in the data format's own encoding
     (SemanticKITTI ``<out>/sequences/NN/predictions/XXXXXX.label``).
