@@ -78,10 +78,10 @@ FORMATS: dict[str, Entry] = {
     ),
     "osf": Entry(
         "flic_cli.io.osf:OsfDataset",
-        "an Ouster OSF file, or a folder of them (pip install 'flic[osf]')",
+        "an Ouster OSF file, or a folder of them (needs ouster-sdk, see docs/sensors.md)",
         frames_per_file="many",
         requires="ouster",
-        install="pip install 'flic[osf]'",
+        install="pip install --no-deps ouster-sdk",
     ),
     "pcd": Entry(
         "flic_cli.io.pcd:PcdDataset",
@@ -92,6 +92,14 @@ FORMATS: dict[str, Entry] = {
         "a nuScenes LIDAR_TOP .pcd.bin, a folder of them or a nuScenes root (Panoptic "
         "nuScenes .npz labels beside them are scored)",
         labelled=True,
+    ),
+    "bag": Entry(
+        "flic_cli.io.bag:BagDataset",
+        "a ROS 1 .bag, ROS 2 bag (folder or .db3, .mcap) or MCAP file: PointCloud2, "
+        "VelodyneScan or Ouster packets",
+        frames_per_file="many",
+        requires="rosbags",
+        install="pip install rosbags",
     ),
 }
 

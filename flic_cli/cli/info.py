@@ -6,7 +6,15 @@ from typing import Annotated, Any
 
 import typer
 
-from flic_cli.cli.app import DataArg, FramesOpt, SequencesOpt, _selection, app, friendly_errors
+from flic_cli.cli.app import (
+    DataArg,
+    FramesOpt,
+    SequencesOpt,
+    TopicOpt,
+    _selection,
+    app,
+    friendly_errors,
+)
 
 
 @app.command(
@@ -15,6 +23,8 @@ from flic_cli.cli.app import DataArg, FramesOpt, SequencesOpt, _selection, app, 
         "- `flic info recording.pcap` (an Ouster pcap with its JSON beside it, or Velodyne)\n\n"
         "- `flic info cloud.pcd`, `flic info nuscenes/samples/LIDAR_TOP/`, `flic info ~/kitti "
         "--sequences 08 --frames 0:100`\n\n"
+        "- `flic info drive.bag` (a bag or MCAP file: its topics, types and message counts, then "
+        "the LiDAR topic as below; `--topic` picks one)\n\n"
         "Prints per recording (sequence): the format, the sensor, the frames (revolutions), beams "
         "x columns, points per frame, the projection coverage (share of the points that own a "
         "pixel of the range image) and where the beam angles came from."
@@ -33,12 +43,21 @@ def info(
             help="Frames per recording read for the points and coverage figures (evenly spread).",
         ),
     ] = 20,
+    topic: TopicOpt = None,
 ) -> None:
     """Show the format, sensor, frames, image size, points and coverage of DATA."""
     from flic_cli.cli.app import _data_or_sample
+    from flic_cli.io.bag import info_lines, is_bag
 
     path = _data_or_sample(data)
     seqs, frame_range = _selection(sequences, frames)
+    seqs = [topic] if topic else seqs
+    if is_bag(path):  # the bag's topics first, then its LiDAR topic like any recording
+        lines, chosen = info_lines(path, seqs[0] if seqs else None)
+        for line in lines:
+            typer.echo(line)
+        if not chosen:
+            return
     for line in describe(path, seqs, frame_range, sample):
         typer.echo(line)
 
@@ -72,7 +91,9 @@ def describe(path: Any, sequences: Any, frames: Any, sample: int = 20) -> list[s
             shapes.add(image.shape)
             projections.add(image.projection)
         n_partial = len(file_info.partial) if file_info is not None else 0
-        text = f"{len(refs)}" + (" revolution(s)" if ds.format in ("ouster", "velodyne") else "")
+        text = f"{len(refs)}" + (
+            " revolution(s)" if ds.format in ("ouster", "velodyne", "bag") else ""
+        )
         if n_partial:
             text += f"; left out (incomplete): {'; '.join(file_info.partial)}"
         model = ds.sensor(refs[0]) if hasattr(ds, "sensor") else None

@@ -10,7 +10,9 @@ Modules
   :class:`Scene`, and :func:`custom_scene`, :func:`person`, :func:`car` for targeted scenes;
 - :mod:`~flic_cli.sample.street`: the street generator, :func:`make_scene`;
 - :mod:`~flic_cli.sample.sensor`: the HDL-64E model and the ray caster :func:`cast` (noise,
-  dropouts, the recording car :data:`EGO_VEHICLE`);
+  dropouts, the recording car :data:`EGO_VEHICLE`), and the other sensors' profiles
+  :data:`SENSOR_PROFILES` (``flic sample --sensor``: VLP-16, VLP-32C, HDL-32E, OS1-64, OS1-128,
+  OS2-128 beam tables and columns);
 - :mod:`~flic_cli.sample.render`: :func:`render_kitti` (a scan in scan order with labels) and
   :func:`render_moosmann` (a range image with per-pixel truth);
 - :mod:`~flic_cli.sample.writer`: :func:`write_sample`, :func:`ensure_sample` (both formats, written
@@ -119,11 +121,14 @@ from flic_cli.sample.scene import (
     person,
 )
 from flic_cli.sample.sensor import (
+    DEFAULT_SENSOR,
     EGO_VEHICLE,
     HDL64_PITCH_DEG,
     MAX_RANGE_M,
     MOOSMANN_HEIGHT,
     MOOSMANN_WIDTH,
+    SENSOR_PROFILES,
+    SensorProfile,
     cast,
     kitti_azimuths,
     moosmann_azimuths,
@@ -132,6 +137,7 @@ from flic_cli.sample.street import make_scene
 from flic_cli.sample.writer import SamplePaths, default_sample_dir, ensure_sample, write_sample
 
 __all__ = [
+    "DEFAULT_SENSOR",
     "EGO_VEHICLE",
     "HDL64_PITCH_DEG",
     "MAX_RANGE_M",
@@ -142,8 +148,10 @@ __all__ = [
     "Cylinder",
     "Ground",
     "MoosmannRender",
+    "SENSOR_PROFILES",
     "SamplePaths",
     "Scene",
+    "SensorProfile",
     "car",
     "cast",
     "custom_scene",
