@@ -28,7 +28,7 @@ import pandas as pd
 from flic_cli.config import load_config
 from flic_cli.io import open_dataset
 from flic_cli.io.atomic import write_table
-from flic_cli.io.semantickitti import instance
+from flic_cli.labels import instance
 from flic_cli.sample import DEFAULT_SENSOR, SENSOR_PROFILES
 
 BANDS_M = (0.0, 5.0, 10.0, 15.0, 20.0, 30.0, np.inf)

@@ -149,3 +149,39 @@ def cycled_vlp16_bag(shared: Path, path: Path, n: int) -> Path:
         for k in range(n):
             w.write(conn, 1_700_000_000_000_000_000 + k * 100_000_000, raws[k % len(raws)][1])
     return path
+
+
+#: ouster-ros's PointCloud2 point (PointOS, 48 bytes): name, offset, datatype code, numpy type.
+OUSTER_ROS_LAYOUT = [
+    ("x", 0, 7, "<f4"), ("y", 4, 7, "<f4"), ("z", 8, 7, "<f4"), ("intensity", 16, 7, "<f4"),
+    ("t", 20, 6, "<u4"), ("reflectivity", 24, 4, "<u2"), ("ring", 26, 4, "<u2"),
+    ("ambient", 28, 4, "<u2"), ("range", 32, 6, "<u4"),
+]  # fmt: skip
+
+
+def ouster_ros_cloud(st: Any, frame: Any, stamp_ns: int = 1_650_000_000_000_000_000) -> Any:
+    """A decoded Ouster frame (its destaggered image and points) as ouster-ros publishes it:
+    organised H x W, ring 0 = top beam, pixels without a return at the origin."""
+    h, w = frame.image.shape
+    dtype = np.dtype(
+        {"names": [n for n, *_ in OUSTER_ROS_LAYOUT], "formats": [f for *_, f in OUSTER_ROS_LAYOUT],
+         "offsets": [o for _, o, *_ in OUSTER_ROS_LAYOUT], "itemsize": 48}
+    )  # fmt: skip
+    cloud = np.zeros(h * w, dtype=dtype)
+    pix = frame.image.point_pixel
+    for j, c in enumerate("xyz"):
+        cloud[c][pix] = frame.points[:, j]
+    cloud["ring"] = np.repeat(np.arange(h), w)
+    cloud["t"] = np.tile(np.arange(w) * (100_000_000 // w), h)
+    cloud["intensity"][pix] = np.arange(pix.size) % 255
+    t = st.types
+    fields = [t["sensor_msgs/msg/PointField"](name=n, offset=o, datatype=d, count=1)
+              for n, o, d, _ in OUSTER_ROS_LAYOUT]  # fmt: skip
+    header = t["std_msgs/msg/Header"](
+        stamp=t["builtin_interfaces/msg/Time"](sec=stamp_ns // 10**9, nanosec=stamp_ns % 10**9),
+        frame_id="os_sensor",
+    )
+    return t["sensor_msgs/msg/PointCloud2"](
+        header=header, height=h, width=w, fields=fields, is_bigendian=False, point_step=48,
+        row_step=48 * w, data=cloud.view(np.uint8), is_dense=False,
+    )  # fmt: skip

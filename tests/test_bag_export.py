@@ -117,3 +117,29 @@ def test_export_needs_a_bag(small_sample, tmp_path):
     assert result.exit_code == 2
     assert "--export mcap needs a bag or MCAP input" in result.output
     assert not any(tmp_path.iterdir())
+
+
+def test_writer_with_label_field_read_back_by_mcap(tmp_path):
+    """CloudBagWriter's `label` field (written when semantics are given), by mcap-ros2-support."""
+    from flic_cli.io.bag_writer import CloudBagWriter
+
+    rng = np.random.default_rng(5)
+    frames = []
+    with CloudBagWriter(tmp_path / "lab", "mcap", "/flic/clusters", with_label=True) as w:
+        for k in range(3):
+            n = 100 + k
+            pts = rng.normal(size=(n, 3)).astype(np.float32)
+            cluster = rng.integers(0, 9, n)
+            label = rng.integers(0, 260, n)
+            w.write(10**9 * (k + 1) + 7, f"f{k}", pts, cluster, None, label)
+            frames.append((pts, cluster, label))
+    got = _read_mcap(tmp_path / "lab")
+    assert len(got) == 3
+    for k, ((log_time, msg), (pts, cluster, label)) in enumerate(zip(got, frames, strict=True)):
+        cloud = _points(msg)
+        assert [f.name for f in msg.fields] == ["x", "y", "z", "intensity", "cluster", "label"]
+        np.testing.assert_array_equal(np.stack([cloud["x"], cloud["y"], cloud["z"]], 1), pts)
+        np.testing.assert_array_equal(cloud["cluster"], cluster)
+        np.testing.assert_array_equal(cloud["label"], label)
+        assert (cloud["intensity"] == 0).all()
+        assert log_time == 10**9 * (k + 1) + 7 and msg.header.frame_id == f"f{k}"

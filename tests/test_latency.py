@@ -16,6 +16,8 @@ def test_summary_line_leaves_the_first_frame_out_and_judges_p99():
     assert "over 4 frames after the first (1000 ms" in line
     assert "median 25.0 ms" in line and "p99 39.7 ms" in line and "max 40.0 ms" in line
     assert "10 Hz (100 ms): yes, 20 Hz (50 ms): yes" in line
+    one = summary_line("m", np.array([253.0]))
+    assert "latency of the only revolution 253 ms" in one and "too few revolutions" in one
     slow = summary_line("m", np.array([5.0, 40, 40, 40, 60]))
     assert "p99 59.4 ms" in slow and "10 Hz (100 ms): yes, 20 Hz (50 ms): no" in slow
 

@@ -16,7 +16,7 @@ from flic_cli.cli import app
 from flic_cli.config import load_config
 from flic_cli.errors import FlicInputError
 from flic_cli.io import open_dataset
-from flic_cli.io.semantickitti import instance, semantic
+from flic_cli.labels import instance, semantic
 from flic_cli.sample.render import render_kitti
 from flic_cli.sample.sensor import cast_full, kitti_azimuths
 from flic_cli.sample.street import make_scene

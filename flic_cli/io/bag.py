@@ -18,10 +18,11 @@ every revolution on the topic is one frame, numbered from 0 in recording order. 
   topic of the bag (``.../metadata``), decoded by :mod:`flic_cli.io.ouster`; one frame = the
   packets of one ``frame_id``.
 
-The bag is read as a stream: the constructor reads the topic once for its frames' timestamps
-(and the beams of its first revolution), :meth:`BagDataset.load` reads one frame, continuing
-where the previous one ended when frames are loaded in order. Memory does not grow with the
-bag's length.
+The bag is read as a stream: the constructor lists the frames' times from the bag's own index
+(ROS 1 connection index, sqlite3 ``messages`` table; MCAP storage and Ouster packets, whose
+frames are frame ids, are read once for them) and reads the first revolution for the beams;
+:meth:`BagDataset.load` reads one frame, continuing where the previous one ended when frames
+are loaded in order (else it seeks by time). Memory does not grow with the bag's length.
 """
 
 from __future__ import annotations
@@ -209,6 +210,7 @@ class _Slot:
     start: int
     stop: int
     frame_id: int = -1
+    skip: int = 0  # earlier messages of the topic with the same time (read past when seeking)
 
 
 @dataclass
@@ -465,7 +467,15 @@ class BagDataset:
         (packets of one frame id that fill every column; partial ones at the start and end of a
         recording are left out, as the pcap reader does)."""
         if not self._is_ouster:
-            return [_Slot(t, t) for _, t, _ in self._messages(reader, conns)]
+            times = index_times(reader, conns, self.root)
+            if times is None:  # no index to read: the topic's messages, read once
+                times = [t for _, t, _ in self._messages(reader, conns)]
+            slots, last, same = [], None, 0
+            for t in times:
+                same = same + 1 if t == last else 0
+                slots.append(_Slot(t, t, skip=same))
+                last = t
+            return slots
         from flic_cli.io import ouster
 
         meta = self._meta
@@ -510,6 +520,8 @@ class BagDataset:
             it = cursor.messages
         else:
             it = self._messages(reader, conns, slot.start, None)
+            for _ in range(slot.skip):  # messages of the same time before this one
+                next(it, None)
             if cursor is not None:
                 cursor.messages, cursor.pending = it, None
         if self._is_ouster:
@@ -676,6 +688,41 @@ class BagDataset:
         else:
             out["beams x columns"] = "unknown: projected by the [projection] settings"
         return out
+
+
+def index_times(reader: Any, conns: list[Any], path: Path) -> list[int] | None:
+    """The bag times of a topic's messages from the bag's own index, without reading them:
+    a ROS 1 bag's connection index (rosbags keeps it), a sqlite3 ``.db3``'s ``messages`` table.
+    None where there is no such index (MCAP storage, compressed files): the caller reads the
+    messages."""
+    readers = getattr(reader, "readers", [])
+    if readers and all(hasattr(r, "indexes") for r in readers):  # rosbags' ROS 1 reader
+        ids = {c.id for c in conns}
+        try:
+            return sorted(i.time for r in readers for cid in ids for i in r.indexes.get(cid, ()))
+        except (AttributeError, TypeError):
+            return None
+    files = [path] if path.suffix == ".db3" else sorted(path.glob("*.db3")) if path.is_dir() else []
+    if not files or any(conns[0].msgtype != c.msgtype for c in conns):
+        return None
+    import sqlite3
+
+    times: list[int] = []
+    for f in files:
+        try:
+            con = sqlite3.connect(f"file:{f}?mode=ro", uri=True)
+            try:
+                rows = con.execute(
+                    "select m.timestamp from messages m join topics t on m.topic_id = t.id "
+                    "where t.name = ? order by m.timestamp",
+                    (conns[0].topic,),
+                ).fetchall()
+            finally:
+                con.close()
+        except sqlite3.Error:
+            return None
+        times += [int(r[0]) for r in rows]
+    return sorted(times)
 
 
 def _scan_of(msg: Any) -> tuple[int, str, list[tuple[float, bytes]]]:

@@ -88,8 +88,14 @@ def summary_line(
     ms, max .. ms [(decode .., project .., method .. ms median)]; p99 keeps up with 10 Hz (100
     ms): yes, 20 Hz (50 ms): no``."""
     total = np.asarray(total_ms, dtype=np.float64)
-    first = float(total[0]) if total.size else float("nan")
-    rest = total[1:] if total.size > 1 else total
+    if total.size < 2:
+        shown = f"{total[0]:.0f} ms" if total.size else "none"
+        return (
+            f"{name}: latency of the only revolution {shown} (JIT and cache loading included): "
+            "too few revolutions to tell whether it keeps up with the sensor"
+        )
+    first = float(total[0])
+    rest = total[1:]
     med, p99 = float(np.median(rest)), float(np.percentile(rest, 99))
     text = (
         f"{name}: latency per revolution (decode + range image + ground + cluster) over "

@@ -236,7 +236,7 @@ def run_segment(spec: SegmentRun) -> SegmentSummary:
         fallbacks,
         sort_skipped(loop.skipped),
         [out / name for name in renders],
-        latency_line(latencies) if ds.format in STREAMS and latencies else None,
+        latency_line(latencies) if ds.format in STREAMS and latencies and sel.jobs == 1 else None,
         [out / w.path.name for w in bag_writers],
     )
 

@@ -105,6 +105,17 @@ sensor's scan order, so that :func:`flic_cli.projection.project_points` recovers
 as a Moosmann-style log (870 x 64 16-bit PNG range images + ``img.cfg``), into a temporary folder
 renamed into place once complete. :func:`ensure_sample` writes the default sample into
 :func:`default_sample_dir` once and reuses it afterwards.
+
+Other sensors
+-------------
+``write_sample(out, sensor="vlp16")`` (``flic sample OUT --sensor vlp16``) casts the same frames
+with another sensor's beam table and columns (:data:`SENSOR_PROFILES`: ``vlp16``, ``vlp32c``,
+``hdl32e``, ``hdl64e`` (the default), ``os1-64``, ``os1-128``, ``os2-128``; where each table comes
+from is in its :attr:`SensorProfile.source`), as the SemanticKITTI sequence alone, with
+``out/sensor.toml`` beside it: the ``[projection]`` table (rows = beams, width = columns) with
+which ``flic ... --config out/sensor.toml`` reads the sequence, and the Bridge parameters that
+follow the beam gap (:func:`flic_cli.sensor_params.bridge_parameters`) where they differ from the
+defaults. The default profile writes exactly the sample described above.
 """
 
 from __future__ import annotations
