@@ -11,11 +11,17 @@ Example
 >>> labels.shape == (frame.points.shape[0],) and int(labels.max()) > 10
 True
 >>> image = flic.segment_range_image(ranges, elevation)        # doctest: +SKIP
+
+Whole runs, as the commands do them, take one run specification (:mod:`flic_cli.runs.spec`):
+
+>>> sel = flic.Selection(flic.sample_data(), frames=(0, 2))              # doctest: +SKIP
+>>> flic.run(flic.EvaluateRun(sel, Path("eval"), ["flic0", "flic14"])).table  # doctest: +SKIP
 """
 
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -23,11 +29,19 @@ from flic_cli.config import Config, load_config
 from flic_cli.io.base import Frame, FrameRef
 from flic_cli.range_image import from_sensor_image
 from flic_cli.runs.pipeline import OWN, Segmenter, build_segmenter, prepare
+from flic_cli.runs.spec import BenchmarkRun, EvaluateRun, SegmentRun, Selection, SweepRun
 
 __all__ = [
+    "BenchmarkRun",
+    "EvaluateRun",
+    "SegmentRun",
+    "Selection",
+    "SweepRun",
     "load_frame",
     "methods",
+    "run",
     "sample_data",
+    "segment_frame",
     "segment_points",
     "segment_range_image",
 ]
@@ -54,6 +68,35 @@ def sample_data() -> Path:
     from flic_cli.sample import ensure_sample
 
     return ensure_sample().kitti_root
+
+
+def run(spec: SegmentRun | EvaluateRun | BenchmarkRun | SweepRun) -> Any:
+    """Run a whole command on a dataset, as ``flic segment`` / ``evaluate`` / ``benchmark`` /
+    ``sweep-threshold`` do (outputs written to ``spec.out``).
+
+    Returns
+    -------
+    What the run returns: a :class:`flic_cli.runs.segment.SegmentSummary`,
+    :class:`flic_cli.runs.evaluate.EvaluateResult`,
+    :class:`flic_cli.runs.benchmark.BenchmarkResult` or :class:`flic_cli.runs.sweep.SweepResult`.
+    """
+    if isinstance(spec, SegmentRun):
+        from flic_cli.runs.segment import run_segment
+
+        return run_segment(spec)
+    if isinstance(spec, EvaluateRun):
+        from flic_cli.runs.evaluate import run_evaluate
+
+        return run_evaluate(spec)
+    if isinstance(spec, BenchmarkRun):
+        from flic_cli.runs.benchmark import run_benchmark
+
+        return run_benchmark(spec)
+    if isinstance(spec, SweepRun):
+        from flic_cli.runs.sweep import run_sweep
+
+        return run_sweep(spec)
+    raise TypeError(f"not a run specification: {type(spec).__name__}")
 
 
 def load_frame(data: str | Path, frame: int = 0, sequence: str | None = None) -> Frame:
@@ -121,6 +164,32 @@ def segment_points(
     if not scan_order:
         projection = dataclasses.replace(projection, mode="spherical")
     prep = prepare(frame, "ground", projection)
+    labels, _ = _segmenter(cfg, method, ground)(prep.image, prep.points)
+    return prep.scan_labels(labels).astype(np.int32, copy=False)
+
+
+def segment_frame(
+    frame: Frame,
+    method: str = "flic14",
+    *,
+    ground: str | None = OWN,
+    config: Config | str | Path | None = None,
+) -> np.ndarray:
+    """Cluster a frame of :func:`load_frame`, on its sensor's own range image when it has one
+    (Ouster, Velodyne, PCD with rings, nuScenes, Moosmann), else projected as the config says.
+
+    Parameters
+    ----------
+    frame : a loaded frame.
+    method, ground, config : as for :func:`segment_points`.
+
+    Returns
+    -------
+    (N_stored,) int32 cluster id of every point of the frame as stored (0 = unclustered, ground,
+    or a point the reader left out).
+    """
+    cfg = _config(config)
+    prep = prepare(frame, "ground", cfg.projection)
     labels, _ = _segmenter(cfg, method, ground)(prep.image, prep.points)
     return prep.scan_labels(labels).astype(np.int32, copy=False)
 

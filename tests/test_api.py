@@ -27,6 +27,18 @@ def test_segment_points_equals_flic_segment(small_sample, tmp_path):
     assert labels.dtype == np.int32 and labels.max() > 10
 
 
+def test_run_takes_a_run_specification(small_sample, tmp_path):
+    sel = flic.Selection(small_sample.kitti_root, frames=(1, 2), progress=False)
+    summary = flic.run(flic.SegmentRun(sel, tmp_path / "seg", "flic14"))
+    assert summary.frames == 1
+    frame = flic.load_frame(small_sample.kitti_root, frame=1)
+    np.testing.assert_array_equal(
+        read_predictions(tmp_path / "seg", "00", 1), flic.segment_points(frame.points, "flic14")
+    )
+    with pytest.raises(TypeError, match="not a run specification"):
+        flic.run(sel)
+
+
 def test_segment_points_options(small_sample):
     frame = flic.load_frame(small_sample.kitti_root, frame=0)
     pts = np.concatenate([frame.points, np.ones((frame.points.shape[0], 1), np.float32)], axis=1)

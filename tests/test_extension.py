@@ -117,7 +117,7 @@ class PixelBlobs:
     def segment(self, image, points: np.ndarray, ground) -> np.ndarray:
         near = (image.ranges > 0) & (image.ranges < self.max_range_m)
         if ground is not None:
-            near &= ~np.asarray(getattr(ground, "left_out", ground))
+            near &= ~ground.left_out  # the ground step's pixels (and held cells)
         blobs, _ = ndimage.label(near, structure=np.ones((3, 3), dtype=bool))
         return drop_small(image.point_labels(blobs), self.min_size)
 

@@ -1,5 +1,6 @@
-"""Reading config files: the shipped presets (``flic_cli/configs/default.toml``), then the user's
-``--config`` file laid over them, validated once into a :class:`flic_cli.config.schema.Config`.
+"""Reading config files: the shipped presets (``flic_cli/config/presets/default.toml``), then the
+user's ``--config`` file laid over them, validated once into a
+:class:`flic_cli.config.schema.Config`.
 
 Every problem -- a file that is not TOML, an unknown section or key, a value of the wrong type or
 out of range -- is a :class:`flic_cli.errors.FlicInputError` naming the file, the table and key,
@@ -35,17 +36,24 @@ METHOD_KEYS = ("kind", "ground", "like")
 
 
 def defaults_path() -> Path:
-    """The shipped presets, ``flic_cli/configs/default.toml`` (``configs/`` in the repository)."""
-    return Path(str(resources.files("flic_cli.configs").joinpath("default.toml")))
+    """The shipped presets, ``flic_cli/config/presets/default.toml`` (``configs/`` in the
+    repository is a link to that folder)."""
+    return Path(str(resources.files("flic_cli.config").joinpath("presets", "default.toml")))
 
 
 def _read_toml(path: Path) -> dict[str, Any]:
-    if not path.is_file():
+    if path.is_dir():
+        raise FlicInputError(path, "is a folder, expected a TOML config file")
+    if not path.exists():
         raise FlicInputError(path, "config file does not exist")
+    if not path.is_file():  # a FIFO or a device would block or never end
+        raise FlicInputError(path, "is not a regular file, expected a TOML config file")
     try:
         return tomllib.loads(path.read_text("utf-8"))
     except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
         raise FlicInputError(path, f"is not valid TOML ({exc})") from None
+    except OSError as exc:
+        raise FlicInputError(path, f"cannot be read ({exc.strerror})") from None
 
 
 def _merge(base: dict[str, Any], over: dict[str, Any]) -> dict[str, Any]:

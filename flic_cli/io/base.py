@@ -27,7 +27,8 @@ class FrameRef:
     frame : frame number (``000123.bin`` -> 123, ``scan00123.png`` -> 123; in a multi-frame file,
         its frame number as the format counts them)
     path : the file that holds the frame (``.bin``, ``.png``; a pcap or a bag holds many)
-    label_path : the ground-truth file, or None when the format or the frame has none
+    label_path : the file holding the frame's ground truth (``path`` itself for a format that
+        stores labels with the points), or None when the format or the frame has none
     format : the format's name in :data:`flic_cli.registry.FORMATS`
     index : position of the frame inside ``path`` (0-based) when the file holds many frames
         (the format's entry says ``frames_per_file="many"``); 0 for a file per frame
