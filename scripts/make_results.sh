@@ -261,6 +261,9 @@ PY
       --out "$out/vlp16-20frames" --work "$TMP/sensors-20"
     python scripts/sensors_synthetic.py --frames 10 --methods flic0,flic14,bridge \
       --ground-remover column --out "$out/ground-column" --work "$TMP/sensors-gc"
+    python scripts/sensors_synthetic.py --frames 20 --methods bridge,dbscan \
+      --sensors vlp32c,hdl32e,os1-64,hdl64e,os2-128,os1-128 \
+      --out "$out/bridge-dbscan-20frames" --work "$TMP/sensors-bd20"
     ;;
   bags)
     # ROS bags: docs/ros.md
