@@ -148,8 +148,9 @@ def evaluate(
 
     try:
         sel = Selection(
-            _data_or_sample(data), seqs, frm, setting, ground_remover, cfg, jobs, skip_bad
-        )
+            _data_or_sample(data), seqs, frm, setting=setting, ground_remover=ground_remover,
+            config=cfg, jobs=jobs, skip_bad=skip_bad,
+        )  # fmt: skip
         result = run_evaluate(
             EvaluateRun(
                 sel,
@@ -233,8 +234,9 @@ def sweep_threshold(
     seqs, frm = _selection(sequences, frames)
     try:
         sel = Selection(
-            _data_or_sample(data), seqs, frm, setting, ground_remover, cfg, jobs, skip_bad
-        )
+            _data_or_sample(data), seqs, frm, setting=setting, ground_remover=ground_remover,
+            config=cfg, jobs=jobs, skip_bad=skip_bad,
+        )  # fmt: skip
         result = run_sweep(
             SweepRun(
                 sel,
