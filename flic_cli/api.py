@@ -41,6 +41,7 @@ __all__ = [
     "methods",
     "run",
     "sample_data",
+    "segment_frame",
     "segment_points",
     "segment_range_image",
 ]
@@ -163,6 +164,32 @@ def segment_points(
     if not scan_order:
         projection = dataclasses.replace(projection, mode="spherical")
     prep = prepare(frame, "ground", projection)
+    labels, _ = _segmenter(cfg, method, ground)(prep.image, prep.points)
+    return prep.scan_labels(labels).astype(np.int32, copy=False)
+
+
+def segment_frame(
+    frame: Frame,
+    method: str = "flic14",
+    *,
+    ground: str | None = OWN,
+    config: Config | str | Path | None = None,
+) -> np.ndarray:
+    """Cluster a frame of :func:`load_frame`, on its sensor's own range image when it has one
+    (Ouster, Velodyne, PCD with rings, nuScenes, Moosmann), else projected as the config says.
+
+    Parameters
+    ----------
+    frame : a loaded frame.
+    method, ground, config : as for :func:`segment_points`.
+
+    Returns
+    -------
+    (N_stored,) int32 cluster id of every point of the frame as stored (0 = unclustered, ground,
+    or a point the reader left out).
+    """
+    cfg = _config(config)
+    prep = prepare(frame, "ground", cfg.projection)
     labels, _ = _segmenter(cfg, method, ground)(prep.image, prep.points)
     return prep.scan_labels(labels).astype(np.int32, copy=False)
 

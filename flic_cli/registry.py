@@ -67,6 +67,41 @@ FORMATS: dict[str, Entry] = {
         "flic_cli.io.moosmann:MoosmannDataset",
         "a Moosmann log (img.cfg + scanNNNNN.png 16-bit range images) or a folder of logs",
     ),
+    "ouster": Entry(
+        "flic_cli.io.ouster:OusterPcapDataset",
+        "an Ouster pcap with its metadata JSON beside it, or a folder of them",
+        frames_per_file="many",
+    ),
+    "velodyne": Entry(
+        "flic_cli.io.velodyne:VelodynePcapDataset",
+        "a Velodyne pcap (VLP-16, VLP-32C, HDL-32E, HDL-64E, ...), or a folder of them",
+        frames_per_file="many",
+    ),
+    "osf": Entry(
+        "flic_cli.io.osf:OsfDataset",
+        "an Ouster OSF file, or a folder of them (pip install 'flic[osf]')",
+        frames_per_file="many",
+        requires="ouster",
+        install="pip install 'flic[osf]'",
+    ),
+    "pcd": Entry(
+        "flic_cli.io.pcd:PcdDataset",
+        "a PCD file (ASCII, binary, binary_compressed; rows from ring/channel), or a folder",
+    ),
+    "nuscenes": Entry(
+        "flic_cli.io.nuscenes:NuScenesDataset",
+        "a nuScenes LIDAR_TOP .pcd.bin, a folder of them or a nuScenes root (Panoptic "
+        "nuScenes .npz labels beside them are scored)",
+        labelled=True,
+    ),
+    "bag": Entry(
+        "flic_cli.io.bag:BagDataset",
+        "a ROS 1 .bag, ROS 2 bag (folder or .db3, .mcap) or MCAP file: PointCloud2, "
+        "VelodyneScan or Ouster packets",
+        frames_per_file="many",
+        requires="rosbags",
+        install="pip install rosbags",
+    ),
 }
 
 #: Method kinds (the ``kind`` of a ``[methods.NAME]`` config table).

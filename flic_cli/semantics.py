@@ -32,7 +32,8 @@ unclustered points (e.g. to 0, unlabeled) would hide them too, but it changes th
 (every such point becomes a false negative of its class). So :func:`combine` keeps every point's
 semantic class (the mIoU is untouched) and gives each unclustered thing point an instance id of
 its own: a one-point segment, below any ``min_points >= 2``, never an FP. The ids follow the
-largest cluster id (numbered per raw class, in scan order); should a frame have more such points
+largest cluster id (numbered across all classes, in scan order: no two such points share an id,
+whatever their classes); should a frame have more such points
 than free ids, the ids repeat cyclically, so a segment holds at most
 ``ceil(points / free ids)`` far-apart points (an error if that would reach 50).
 
@@ -115,8 +116,8 @@ def combine(semantics: np.ndarray, cluster_ids: np.ndarray) -> np.ndarray:
     Returns
     -------
     (N,) uint32 labels (:func:`flic_cli.labels.encode`): thing points in a cluster carry its id,
-    unclustered thing points one-point segments (ids above the largest cluster id, counted per
-    raw class), every other point instance 0.
+    unclustered thing points one-point segments (ids above the largest cluster id, one per
+    point across all classes), every other point instance 0.
 
     Raises
     ------
@@ -139,15 +140,12 @@ def combine(semantics: np.ndarray, cluster_ids: np.ndarray) -> np.ndarray:
     if loose.size:
         top = int(inst.max(initial=0))
         free = MAX_ID - top
-        order = loose[np.argsort(sem[loose], kind="stable")]  # by class, then scan order
-        groups = sem[order]
-        starts = np.flatnonzero(np.r_[True, groups[1:] != groups[:-1]])
-        rank = np.arange(order.size) - np.repeat(starts, np.diff(np.r_[starts, order.size]))
-        largest = int(np.diff(np.r_[starts, order.size]).max())
-        if free < 1 or -(-largest // free) > _MAX_SINGLETON_SEGMENT:
+        # one id per point across all classes (in scan order), so that tools scoring the
+        # instance id alone (label >> 16) do not merge a car point with a person point
+        if free < 1 or -(-loose.size // free) > _MAX_SINGLETON_SEGMENT:
             raise ValueError(
-                f"{largest} unclustered points of one thing class and {top} clusters do not fit "
-                "16-bit instance ids as segments of under 50 points"
+                f"{loose.size} unclustered thing points and {top} clusters do not fit 16-bit "
+                "instance ids as segments of under 50 points"
             )
-        inst[order] = top + 1 + rank % free
+        inst[loose] = top + 1 + np.arange(loose.size) % free
     return encode(sem, inst)

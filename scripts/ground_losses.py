@@ -7,8 +7,8 @@ remover took as ground (``removed``), the cluster holding most of its points (``
 points, ``overlap`` with the object), the ground-class points in that cluster
 (``ground_in_cluster``), the IoU of object and cluster and the IoU the same cluster would have
 without its ground-class points (``iou_without_ground``). This IoU is the object's IoU with its
-majority cluster, a simpler matching than the protocol's one-cluster-one-object rule (SPEC 4), so
-its mean differs from ``flic evaluate``'s IoU_mu by a few tenths.
+majority cluster, a simpler matching than the protocol's one-cluster-one-object rule
+(docs/specification.md), so its mean differs from ``flic evaluate``'s IoU_mu by a few tenths.
 
 **Merged pairs** (``OUT_pairs.csv``): for every frame, the method runs in the no-ground setting
 (ground removed by label) and in the ground setting with the remover. A pair of ground-truth

@@ -5,7 +5,7 @@ road, so the ground removers and the growth of Bogoslavskyi's remover see little
 5 % of the pixels, where a real HDL-64E log has about half). KITTI's scans come from the same
 sensor model as the Karlsruhe logs (Velodyne HDL-64E, 1.73 m above the road), so the same scans
 binned to 870 columns are a log with real ground, vegetation and clutter, for timing on content
-like the real logs (the real logs' licence forbids shipping them, SPEC section 1).
+like the real logs (the real logs' licence forbids shipping them, docs/specification.md).
 
 Every scan is projected with flic's ring recovery at 870 columns (column 0 = yaw +180 deg, the
 Moosmann convention), the nearest point per pixel; the rows' pitch is the negated median

@@ -1,61 +1,74 @@
 #!/usr/bin/env bash
-# Rerun every result committed under results/ (results/README.md explains each one), from the
-# repository root with ../shared beside it and the dev install active:
+# Remake every result committed under results/ with the commands that results/README.md and
+# results/ground/README.md write next to each file. From the repository root, with ../shared
+# beside it and the dev install active:
 #     . .venv/bin/activate && bash scripts/make_results.sh [step ...]
-# Steps: bench repeats evaluate ground sweeps coverage dbscan pictures (default: all, in this order;
-# the benchmarks first, on a quiet machine, since evaluate takes its times from them), and cpp
-# (not in the default: their C++ against flic; needs DC=<a PRBonn/depth_clustering checkout>
-# and the system packages that scripts/depth_clustering/time_cpp.sh names).
-# On a 2-core machine the whole run takes about half an hour. JOBS sets evaluate's processes.
+# Steps, in this order (default: all of them):
+#     bench repeats evaluate ground synthetic ground-sweep ground-speed sweeps bridge-grid
+#     coverage dbscan pictures profile cpp panoptic
+# The benchmarks come first, on a quiet machine: evaluate and ground take their times from them.
+# Two steps need something outside the repository; without it they say so and are skipped:
+#     cpp       Bogoslavskyi & Stachniss' own C++: DC=<a PRBonn/depth_clustering checkout>, and
+#               the system packages that scripts/depth_clustering/time_cpp.sh names;
+#               also remakes results/ground/bogoslavskyi_fidelity*.csv (their ground masks)
+#     panoptic  semantic-kitti-api's own scores: SKAPI=<a PRBonn/semantic-kitti-api checkout>,
+#               in a Python with numpy and pyyaml
+# ground-sweep and bridge-grid are the longest steps (many evaluations of the 50 frames each).
+# JOBS sets the processes of evaluate and sweep-threshold.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 DATA=../shared/data/semantickitti
 JOBS=${JOBS:-2}
-LOG=${LOG:-/tmp/flic-bench-log}
-# the 50 shared scans binned to 870 x 64: a Moosmann log with real ground (the synthetic one hides
-# the road under its ego car; every remover finds there a fraction of the ground of a real log)
-KLOG=${KLOG:-/tmp/flic-kitti-log}
+TMP=${TMP_RESULTS:-/tmp/flic-results}
+LOG=$TMP/bench-log            # the synthetic 870 x 64 Moosmann log (500 frames)
+KLOG=$TMP/kitti-log           # the 50 shared scans binned to 870 x 64: a log with real ground
 METHODS=bogoslavskyi,flic0,flic1,flic6,flic14,flic1n,flic6n,flic14n,bridge,dbscan
 PEERS=flic0-scipy,flic14-scipy
-STEPS=${*:-bench repeats evaluate ground sweeps coverage dbscan pictures}
+GROUND_METHODS=flic0,flic1,flic6,flic14,flic1n,flic6n,flic14n,bridge,dbscan-fast
+DEFAULT="bench repeats evaluate ground synthetic ground-sweep ground-speed sweeps bridge-grid"
+DEFAULT="$DEFAULT coverage dbscan pictures profile cpp panoptic"
+STEPS=${*:-$DEFAULT}
+mkdir -p "$TMP"
 
 fresh() { rm -rf "$1"; }  # an output folder is rewritten whole (no stale files)
+synthetic_log() { test -d "$LOG/moosmann" || flic sample "$LOG" --frames 500; }
+kitti_log() { test -d "$KLOG" || python scripts/kitti_as_moosmann.py "$DATA" "$KLOG"; }
+sample() {  # sample FOLDER FRAMES SEED
+  test -d "$1/semantickitti" || flic sample "$1" --frames "$2" --seed "$3"
+}
 
 for step in $STEPS; do
+  echo "== make_results: $step" >&2
   case $step in
   bench)
-    # runtimes (paper Fig. 9, 10): a 500-frame synthetic 870 x 64 log and the 50 real frames,
-    # each method with its own ground remover (and, on the log, with the paper's), one thread,
-    # the paper-style scipy FLIC as a peer; each frame's median over several rounds (5: with 3,
-    # p99/median of one method moved between 1.1 and 1.4 from run to run on this shared VM)
-    test -d "$LOG/moosmann" || flic sample "$LOG" --frames 500
+    # runtimes (paper Fig. 9, 10): results/README.md section 3
+    synthetic_log
+    kitti_log
     fresh results/benchmark/synthetic-moosmann
     flic benchmark "$LOG/moosmann" --methods "$METHODS,$PEERS" --rounds 5 \
       --out results/benchmark/synthetic-moosmann
     fresh results/benchmark/synthetic-moosmann-paper-ground
     flic benchmark "$LOG/moosmann" --methods "$METHODS,$PEERS" --ground-remover paper \
       --rounds 5 --no-plots --out results/benchmark/synthetic-moosmann-paper-ground
-    test -d "$KLOG" || python scripts/kitti_as_moosmann.py "$DATA" "$KLOG"
     fresh results/benchmark/kitti-as-moosmann
-    flic benchmark "$KLOG" --methods "$METHODS,$PEERS" --rounds 5 --dbscan-every 2 \
+    flic benchmark "$KLOG" --methods "$METHODS,$PEERS" --rounds 5 --slow-every 2 \
       --out results/benchmark/kitti-as-moosmann
     fresh results/benchmark/kitti-as-moosmann-paper-ground
     flic benchmark "$KLOG" --methods "$METHODS,$PEERS" --ground-remover paper --rounds 5 \
-      --dbscan-every 2 --no-plots --out results/benchmark/kitti-as-moosmann-paper-ground
+      --slow-every 2 --no-plots --out results/benchmark/kitti-as-moosmann-paper-ground
     fresh results/benchmark/semantickitti
-    flic benchmark "$DATA" --methods "$METHODS,$PEERS" --rounds 5 --dbscan-every 2 \
+    flic benchmark "$DATA" --methods "$METHODS,$PEERS" --rounds 5 --slow-every 2 \
       --out results/benchmark/semantickitti
     python scripts/log_stats.py "$LOG/moosmann" > results/benchmark/synthetic-moosmann/log_stats.txt
     python scripts/log_stats.py "$KLOG" > results/benchmark/kitti-as-moosmann/log_stats.txt
     ;;
   repeats)
-    # how much the benchmark figures move between runs of the same code: the log benchmarks
-    # again with --rounds 3 (summaries only)
-    test -d "$LOG/moosmann" || flic sample "$LOG" --frames 500
-    test -d "$KLOG" || python scripts/kitti_as_moosmann.py "$DATA" "$KLOG"
+    # how much the benchmark figures move between runs of the same code (summaries only)
+    synthetic_log
+    kitti_log
     fresh results/benchmark/repeats
-    for spec in "own-remover-rounds3:$LOG/moosmann:own" "paper-remover-rounds3-a:$LOG/moosmann:paper" \
-      "paper-remover-rounds3-b:$LOG/moosmann:paper" "kitti-as-moosmann-own-remover-rounds3:$KLOG:own"; do
+    for spec in "synthetic-own:$LOG/moosmann:own" "synthetic-paper-a:$LOG/moosmann:paper" \
+      "synthetic-paper-b:$LOG/moosmann:paper" "kitti-as-moosmann-own:$KLOG:own"; do
       IFS=: read -r name log remover <<< "$spec"
       tmp=$(mktemp -d)
       flic benchmark "$log" --methods "$METHODS" --ground-remover "$remover" --rounds 3 \
@@ -67,30 +80,77 @@ for step in $STEPS; do
     ;;
   evaluate)
     # Table 1 (both settings, the paper's ground extraction), panoptic quality with oracle
-    # semantics, intervals, quality against speed (times of the benchmark above)
+    # semantics, intervals, quality against speed: results/README.md sections 1, 5, 7
     fresh results/evaluate
     flic evaluate "$DATA" --setting both --semantics oracle --jobs "$JOBS" \
-      --runtimes results/benchmark/semantickitti --out results/evaluate 2> "$LOG.err"
+      --runtimes results/benchmark/semantickitti --out results/evaluate 2> "$TMP/evaluate.err"
     # the estimate of the run's duration it printed before the bulk started
-    tr '\r' '\n' < "$LOG.err" | grep '^estimate' > results/evaluate/estimate.txt
+    tr '\r' '\n' < "$TMP/evaluate.err" | grep '^estimate' > results/evaluate/estimate.txt
     rm -rf results/evaluate/parts
-    # which differences between methods are significant (paired bootstrap over frames)
     python scripts/paired_differences.py results/evaluate
     ;;
   ground)
-    # the ground setting with every other remover (the paper's is in results/evaluate)
+    # every other remover in both settings, the ground table, the gaps' intervals, the labels
+    # as masks, where the gap goes, the pixels' heights, the figure: results/ground/README.md
     for remover in column bogoslavskyi patchworkpp; do
       fresh "results/ground/evaluate-$remover"
-      flic evaluate "$DATA" --setting ground --ground-remover "$remover" --jobs "$JOBS" \
+      flic evaluate "$DATA" --setting both --ground-remover "$remover" --jobs "$JOBS" \
         --runtimes results/benchmark/semantickitti --out "results/ground/evaluate-$remover"
       rm -rf "results/ground/evaluate-$remover/parts"
     done
+    python scripts/ground_table.py "$DATA" --evaluate paper=results/evaluate \
+      --evaluate bogoslavskyi=results/ground/evaluate-bogoslavskyi \
+      --evaluate column=results/ground/evaluate-column \
+      --evaluate patchworkpp=results/ground/evaluate-patchworkpp --out results/ground/table.csv
+    python scripts/paired_differences.py results/ground/evaluate-column --settings \
+      --out results/ground/gap_intervals_column.csv
+    python scripts/ground_oracle.py "$DATA" --methods "$GROUND_METHODS" \
+      --out results/ground/oracle.csv --counts
+    for m in flic0 flic14 bridge dbscan; do
+      python scripts/ground_losses.py "$DATA" --method "$m" --remover column \
+        --out "results/ground/losses_$m"
+    done
+    python scripts/pixel_heights.py "$DATA" --out results/ground/pixel_heights.csv
     python scripts/ground_figure.py "$DATA" --sequence 08 --frame 0 \
       --out results/ground/ground_masks_08_000000.png
     ;;
+  synthetic)
+    # column on a synthetic sample none of its parameters was chosen on (people, cyclists)
+    S7=$TMP/sample-seed7
+    sample "$S7" 60 7
+    out=results/ground/evaluate-column-synthetic-seed7
+    fresh "$out"
+    flic evaluate "$S7/semantickitti" --setting both --ground-remover column --jobs "$JOBS" \
+      --out "$out"
+    python scripts/paired_differences.py "$out" --settings \
+      --out results/ground/gap_intervals_column_synthetic_seed7.csv
+    # summaries only (the per-object and per-frame tables of 60 synthetic frames are large)
+    rm -rf "$out/parts" "$out/per_object.csv" "$out/per_frame.csv"
+    ;;
+  ground-sweep)
+    # column's parameters, one at a time around the defaults (shared frames + 20 synthetic)
+    python scripts/ground_sweep.py "$DATA" --params \
+      neighbour_px,neighbour_band_m,foot_deg,under_m,face_deg,base_band_m,point_heights,hidden_points \
+      --methods "$GROUND_METHODS" --out results/ground/sweep_column_neighbours.csv
+    python scripts/ground_sweep.py "$DATA" --params hold_feet,attach_m \
+      --methods "$GROUND_METHODS" --out results/ground/sweep_column_hold.csv
+    python scripts/ground_sweep.py "$DATA" --out results/ground/sweep_column.csv \
+      --params noise_m,slope_change_deg,kerb_m,max_step_m,flat_deg,seed_tolerance_m,base_band_m \
+      --methods flic0,flic6,flic14
+    ;;
+  ground-speed)
+    # the removers alone, interleaved
+    kitti_log
+    python scripts/ground_speed.py "$DATA" --removers column,paper,bogoslavskyi,patchworkpp \
+      --rounds 3 --out results/ground/speed_per_point_semantickitti.csv
+    python scripts/ground_speed.py "$KLOG" --removers column,paper,bogoslavskyi,patchworkpp \
+      --rounds 5 --out results/ground/speed_per_point_kitti-as-moosmann.csv
+    python scripts/ground_speed.py "$DATA" \
+      --removers column,column:hidden_points=False,paper,patchworkpp --rounds 3 \
+      --out results/ground/speed_per_point_without_step7_semantickitti.csv
+    ;;
   sweeps)
-    # threshold studies (paper Fig. 8), no-ground setting (Bridge's grid of variants behind its
-    # defaults is in results/sweep/bridge/, with its own commands)
+    # threshold studies (paper Fig. 8), no-ground setting: results/README.md section 2
     for spec in "flic0:--method flic --mc 0" "flic1-map:--method flic --mc 1" \
       "flic1-neighbour:--method flic1n" "bogoslavskyi:--method bogoslavskyi" \
       "dbscan:--method dbscan" "bridge-default:--method bridge"; do
@@ -100,8 +160,26 @@ for step in $STEPS; do
       flic sweep-threshold "$DATA" ${spec#*:} --jobs "$JOBS" --out "results/sweep/$name"
     done
     ;;
+  bridge-grid)
+    # Bridge's variants behind its defaults: results/sweep/bridge/README.md
+    sample "$TMP/sample-seed0" 20 0
+    sample "$TMP/sample-seed1" 20 1
+    for set in "kitti:$DATA" "sample0:$TMP/sample-seed0/semantickitti" \
+      "sample1:$TMP/sample-seed1/semantickitti"; do
+      name=${set%%:*} data=${set#*:}
+      for v in bridge_g0_r12 bridge_g150_r12 bridge_g175_r12 bridge_g200_r12 bridge_g225_r12 \
+        bridge_g250_r12 bridge_g200_r4 bridge_g200_r8 bridge_g200_r16 bridge_g200_r24; do
+        out=results/sweep/bridge/$name/$v
+        fresh "$out"
+        flic sweep-threshold "$data" --config configs/bridge-sweep.toml --method "$v" \
+          --setting no-ground --from 0.2 --to 1.0 --step 0.05 --jobs "$JOBS" --out "$out"
+        # the plot only for the chosen variant
+        test "$v" = bridge_g200_r12 || rm -f "$out/sweep.png"
+      done
+    done
+    ;;
   coverage)
-    python scripts/projection_coverage.py
+    python scripts/projection_coverage.py "$DATA" --out results/projection_coverage.csv
     ;;
   dbscan)
     python scripts/dbscan_backends.py "$DATA" results/dbscan-backends
@@ -117,17 +195,55 @@ for step in $STEPS; do
     done
     rm -rf "$tmp"
     ;;
+  profile)
+    # where the time of one frame of flic evaluate goes: results/README.md section 10
+    mkdir -p results/profile
+    for m in flic0 flic14 bridge; do
+      python scripts/profile_stages.py "$DATA" --method "$m" --setting ground \
+        --ground-remover paper --repeat 3 > "results/profile/$m.txt"
+    done
+    ;;
   cpp)
-    # Bogoslavskyi & Stachniss' own C++ and flic, alternating in one session, on both logs above
-    # (their reader subtracts its per-row range corrections of the Karlsruhe sensor from every
-    # log: a few centimetres per row, at most 0.2 m, which can move what their remover takes as
-    # ground, and with it their time, a little)
-    test -d "$LOG/moosmann" || flic sample "$LOG" --frames 500
-    bash scripts/depth_clustering/compare.sh "${DC:?set DC to a depth_clustering checkout}" \
-      "$LOG/moosmann" results/benchmark/cpp-comparison
-    test -d "$KLOG" || python scripts/kitti_as_moosmann.py "$DATA" "$KLOG"
+    # their C++ against flic, alternating in one session, on both logs; their ground masks
+    if [ -z "${DC:-}" ]; then
+      echo "step cpp skipped: set DC to a PRBonn/depth_clustering checkout" >&2
+      continue
+    fi
+    synthetic_log
+    kitti_log
+    bash scripts/depth_clustering/compare.sh "$DC" "$LOG/moosmann" results/benchmark/cpp-comparison
     bash scripts/depth_clustering/compare.sh "$DC" "$KLOG" \
       results/benchmark/cpp-comparison-kitti-as-moosmann
+    S=$TMP/sample-100
+    test -d "$S/moosmann" || flic sample "$S" --frames 100
+    rm -rf "$TMP/masks-s" "$TMP/masks-k"
+    bash scripts/depth_clustering/time_cpp.sh "$DC" "$S/moosmann" dump "$TMP/masks-s"
+    python scripts/bogoslavskyi_fidelity.py "$S/moosmann" "$TMP/masks-s" \
+      --out results/ground/bogoslavskyi_fidelity.csv
+    bash scripts/depth_clustering/time_cpp.sh "$DC" "$KLOG" dump "$TMP/masks-k"
+    python scripts/bogoslavskyi_fidelity.py "$KLOG" "$TMP/masks-k" \
+      --out results/ground/bogoslavskyi_fidelity_kitti_as_moosmann.csv
+    ;;
+  panoptic)
+    # semantic-kitti-api's evaluate_panoptic.py on flic's predictions: results/panoptic/README.md
+    if [ -z "${SKAPI:-}" ]; then
+      echo "step panoptic skipped: set SKAPI to a PRBonn/semantic-kitti-api checkout" >&2
+      continue
+    fi
+    tmp=$(mktemp -d)
+    flic evaluate "$DATA" --methods flic14,bridge --setting no-ground --semantics oracle \
+      --jobs "$JOBS" --out "$tmp/ev"
+    cp "$tmp/ev/panoptic.csv" "$tmp/ev/run.json" results/panoptic/
+    data=$(realpath "$DATA")
+    python -c "import yaml; d = yaml.safe_load(open('$SKAPI/config/semantic-kitti.yaml')); \
+d['split']['valid'] = [0, 1, 3, 4, 8]; yaml.safe_dump(d, open('$tmp/sk.yaml', 'w'))"
+    for m in flic14 bridge; do
+      flic segment "$DATA" --method "$m" --semantics oracle --out "$tmp/$m"
+      (cd "$SKAPI" && python evaluate_panoptic.py --dataset "$data" --predictions "$tmp/$m" \
+        --split valid --data_cfg "$tmp/sk.yaml" --output "$tmp/$m")
+      cp "$tmp/$m/scores.txt" "results/panoptic/semantic-kitti-api_scores_$m.txt"
+    done
+    rm -rf "$tmp"
     ;;
   *)
     echo "unknown step $step" >&2

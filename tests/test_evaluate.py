@@ -15,7 +15,7 @@ from typer.testing import CliRunner
 from flic_cli.cli import app
 from flic_cli.errors import FlicInputError
 from flic_cli.metrics import IOU_THRESHOLDS
-from flic_cli.runs.parallel import imap_frames
+from flic_cli.runs.parallel import imap_frames, resolve_jobs
 from flic_cli.runs.scoring import FRAME_COLUMNS, OBJECT_COLUMNS
 from flic_cli.runs.tables import SCORE_COLUMNS, TABLE_COLUMNS
 
@@ -399,7 +399,10 @@ def test_estimate_line() -> None:
     line = estimate_line(timing, 1000, jobs=4, scheduler=None)
     # median frame 1.2 s, dbscan 0.6 s, flic0 2 ms, the rest the median of 0.498, 0.498, 0.598
     assert line.startswith("estimate from 3 frame(s): 1.2 s per frame (flic0 2 ms, dbscan 600 ms;")
-    assert "scoring 500 ms) x 1000 frames = 20.0 min of one worker / 4 processes = 5.0 min" in line
+    workers = resolve_jobs(4, 1000)  # --jobs is clamped to the CPU cores
+    assert "scoring 500 ms) x 1000 frames = 20.0 min of one worker" in line
+    if workers > 1:
+        assert f" / {workers} processes = {20.0 / workers:.1f} min" in line
     assert "dask worker threads" in estimate_line(timing, 10, jobs=1, scheduler="tcp://x:1")
 
 

@@ -245,3 +245,45 @@ def test_paper_kernel_equals_the_rule_cell_by_cell(ranges):
     elevation = np.radians(np.linspace(-8.0, -24.0, h)) if h > 1 else np.radians([-15.0])
     image = RangeImage(ranges, elevation, np.flatnonzero(ranges.reshape(-1)), "native")
     assert np.array_equal(paper_ground(image), _paper_reference(ranges, elevation))
+
+
+@pytest.mark.parametrize("name", ["paper", "bogoslavskyi", "column"])
+def test_every_remover_gives_one_typed_ground_step(small_sample, name):
+    """The one contract: ``extract(image, points) -> Ground``; a per-pixel remover's points take
+    their pixel's decision and its clusterers see the image itself; the column remover's held
+    cells are never ground, are attached as the table says, and its decided points that left
+    their pixel are ground."""
+    from flic_cli.ground import REMOVERS
+    from flic_cli.ground.base import Ground, point_ground
+
+    remover = REMOVERS[name]()
+    for frame, image in list(_frames(small_sample))[:2]:
+        ground = remover.extract(image, frame.points)
+        assert isinstance(ground, Ground)
+        assert ground.mask.shape == image.shape and ground.mask.dtype == bool
+        assert not ground.mask[image.ranges == 0].any()
+        if name != "column":
+            assert ground.image is image and ground.decided is None and ground.held is None
+            assert np.array_equal(ground.on_ground, point_ground(image, ground.mask))
+            assert ground.left_out is ground.mask
+            continue
+        assert not (ground.held & ground.mask).any()
+        assert np.array_equal(ground.left_out, ground.mask | ground.held)
+        assert np.array_equal(np.sort(ground.attached[:, 0]), np.flatnonzero(ground.held))
+        counts = ground.image.point_counts().reshape(-1)
+        assert np.array_equal(ground.attached[:, 2], counts[ground.attached[:, 0]])
+        left = (ground.image.point_pixel < 0) & (image.point_pixel >= 0)
+        assert ground.on_ground[left].all()
+
+
+def test_a_ground_step_has_held_cells_and_their_attachments_together():
+    from flic_cli.ground.base import Ground
+
+    image = RangeImage(np.ones((2, 3), np.float32), np.zeros(2), np.arange(6), "native")
+    none = np.zeros((2, 3), dtype=bool)
+    with pytest.raises(ValueError, match="held"):
+        Ground(none, image, held=none)
+    with pytest.raises(ValueError, match="held"):
+        Ground(none, image, attached=np.zeros((0, 3), np.int64))
+    step = Ground.from_mask(image, [[1, 0, 0], [0, 0, 0]])
+    assert step.mask.dtype == bool and step.on_ground.tolist() == [1, 0, 0, 0, 0, 0]

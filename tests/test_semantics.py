@@ -45,9 +45,10 @@ def test_combine_rules() -> None:
     # thing points in a cluster keep its id; stuff and class-0 points get 0 whatever their id
     assert inst[:2].tolist() == [2, 2] and inst[4:6].tolist() == [0, 0]
     assert inst[8:].tolist() == [0, 0]
-    # unclustered thing points: one id each, above the largest cluster id (2), per class
+    # unclustered thing points: one id each, above the largest cluster id (2), in scan order
+    # across all classes (a person and a moving-car point never share an instance id)
     assert inst[2:4].tolist() == [3, 4]
-    assert inst[6] == 3 and inst[7] == 3  # person and moving car: their own classes
+    assert inst[6] == 5 and inst[7] == 6
 
 
 def test_unclustered_thing_points_are_never_counted_as_instances() -> None:
@@ -159,7 +160,7 @@ def test_write_semantic_predictions_round_trip(tmp_path) -> None:
     np.testing.assert_array_equal(labels, combine(sem, ids))
     got_ids, got_sem = read_predictions(tmp_path, "00", 12, semantics=True)
     np.testing.assert_array_equal(got_sem, sem)
-    np.testing.assert_array_equal(got_ids, [4, 5, 0, 5, 6])
+    np.testing.assert_array_equal(got_ids, [4, 5, 0, 6, 7])  # one id per loose point
 
 
 def test_read_semantics(tmp_path) -> None:

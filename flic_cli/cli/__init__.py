@@ -10,7 +10,13 @@ import sys
 
 import typer
 
-from flic_cli.cli import benchmark, evaluate, segment  # noqa: F401  (registers the commands)
+from flic_cli.cli import (  # noqa: F401  (registers the commands)
+    benchmark,
+    evaluate,
+    info,
+    segment,
+    view,
+)
 from flic_cli.cli.app import app
 
 __all__ = ["app", "main"]
@@ -26,6 +32,7 @@ def main(argv: list[str] | None = None) -> None:
     from flic_cli.runs.environment import keep_freed_memory
 
     keep_freed_memory()  # every frame reuses the same buffers (see its docstring)
+    _terminate_like_ctrl_c()
     command = typer.main.get_command(app)
     click = _click_exceptions(command)
     ClickException = click.ClickException  # noqa: N806
@@ -53,3 +60,21 @@ def _click_exceptions(command: object) -> object:
         if module.endswith(".core") and module != "typer.core":
             return importlib.import_module(module.removesuffix(".core") + ".exceptions")
     return importlib.import_module("click.exceptions")  # pragma: no cover
+
+
+class Terminated(KeyboardInterrupt):
+    """SIGTERM, handled like Ctrl-C: ``finally`` blocks run, so staging folders and temporary
+    files are removed and finished work is kept, then flic exits (code 130)."""
+
+
+def _raise_terminated(signum: int, frame: object) -> None:
+    raise Terminated()
+
+
+def _terminate_like_ctrl_c() -> None:
+    """Make SIGTERM (``kill``, a job scheduler's stop) clean up as Ctrl-C does, unless the
+    caller already chose what SIGTERM does."""
+    import signal
+
+    if signal.getsignal(signal.SIGTERM) is signal.SIG_DFL:
+        signal.signal(signal.SIGTERM, _raise_terminated)

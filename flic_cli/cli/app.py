@@ -7,7 +7,9 @@ are named.
 
 from __future__ import annotations
 
+import errno
 import functools
+import os
 import warnings
 from collections.abc import Callable
 from pathlib import Path
@@ -126,6 +128,15 @@ SkipBadOpt = Annotated[
     ),
 ]
 
+TopicOpt = Annotated[
+    str | None,
+    typer.Option(
+        "--topic",
+        help="Bags and MCAP files: the LiDAR topic to read (PointCloud2, VelodyneScan or Ouster "
+        "packets). Default: the bag's only LiDAR topic.",
+    ),
+]
+
 
 def ground_remover_option(default_help: str) -> Any:
     """The ``--ground-remover`` option, listing the registered removers."""
@@ -155,6 +166,10 @@ def friendly_errors(func: Callable[..., Any]) -> Callable[..., Any]:
             return func(*args, **kwargs)
         except FlicInputError as exc:
             _fail(str(exc))
+        except OSError as exc:  # a disk that fills up under a write no check could foresee
+            if exc.errno not in (errno.ENOSPC, getattr(errno, "EDQUOT", errno.ENOSPC)):
+                raise
+            _fail(f"{exc.filename or 'output'}: cannot be written: {os.strerror(exc.errno)}")
         except KeyboardInterrupt:
             typer.echo("interrupted", err=True)
             raise typer.Exit(130) from None

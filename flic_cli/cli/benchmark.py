@@ -14,6 +14,7 @@ from flic_cli.cli.app import (
     SequencesOpt,
     SettingOpt,
     SkipBadOpt,
+    TopicOpt,
     _data_or_sample,
     _selection,
     app,
@@ -97,6 +98,7 @@ def benchmark(
         bool, typer.Option("--plots/--no-plots", help="Write runtime.png, boxplot_hz.png, ...")
     ] = True,
     skip_bad: SkipBadOpt = False,
+    topic: TopicOpt = None,
 ) -> None:
     """Time the segmentation of every frame (range image in, labels out, ground extraction
     included), single-threaded, after a warm-up, each method in a pass over the frames of its
@@ -117,6 +119,7 @@ def benchmark(
     cfg = load_config(config)
     names = parse_methods(methods, cfg)
     seqs, frm = _selection(sequences, frames)
+    seqs = [topic] if topic else seqs
     sel = Selection(
         _data_or_sample(data, moosmann=True), seqs, frm, setting=setting,
         ground_remover=ground_remover, config=cfg, skip_bad=skip_bad,

@@ -138,13 +138,17 @@ def evaluate(
     names = parse_methods(methods, cfg)
     seqs, frm = _selection(sequences, frames)
 
+    status: list[str] = []
+
     def started(total: int, done: int, missing: int) -> None:
-        parts = [f"evaluating {total} frames"]
+        # said once the run succeeded: a run stopped by bad input prints its one error line only
+        # (the progress bar shows the frames meanwhile)
+        parts = [f"evaluated {total} frames"]
         if done:
             parts.append(f"{done} finished earlier")
         if missing:
             parts.append(f"left out {missing} frames without .label files")
-        typer.echo(", ".join(parts), err=True)
+        status.append(", ".join(parts))
 
     try:
         sel = Selection(
@@ -167,6 +171,7 @@ def evaluate(
         )
     except KeyboardInterrupt:
         _interrupted(out, resumable=True)
+    typer.echo("\n".join(status), err=True)
     typer.echo(result.text())
     if result.skipped:
         typer.echo(

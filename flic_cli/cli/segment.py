@@ -17,6 +17,7 @@ from flic_cli.cli.app import (
     SequencesOpt,
     SettingOpt,
     SkipBadOpt,
+    TopicOpt,
     _data_or_sample,
     _selection,
     app,
@@ -35,6 +36,8 @@ from flic_cli.cli.app import (
         "- `flic segment ~/kitti --sequences 08 --method flic14 --semantics oracle --out pan/` "
         "(panoptic predictions for semantic-kitti-api)\n\n"
         "- `flic segment ~/kitti --frames 0:10 --export ply --out ply/`\n\n"
+        "- `flic segment drive.bag --topic /velodyne_points --export mcap --out seg/` (a ROS 2 "
+        "bag of clusters for Foxglove / RViz)\n\n"
         "A run that stops at a bad frame writes nothing (use --skip-bad to go on past it)."
     )
 )
@@ -74,11 +77,15 @@ def segment(
         list[str] | None,
         typer.Option(
             help="Also write each frame as: `ply` (a PLY point cloud with cluster ids and colours, "
-            "for CloudCompare, MeshLab, Open3D). Repeatable."
+            "for CloudCompare, MeshLab, Open3D); for a bag input `mcap` or `bag` (a ROS 2 bag, "
+            "MCAP or sqlite3, of sensor_msgs/PointCloud2 x y z intensity cluster on "
+            "/flic/clusters with the input's stamps and frame id, for RViz / Foxglove). "
+            "Repeatable."
         ),
     ] = None,
     jobs: JobsOpt = 1,
     skip_bad: SkipBadOpt = False,
+    topic: TopicOpt = None,
 ) -> None:
     """Segment scans and write predictions: for SemanticKITTI `.label` files (cluster id in the
     upper 16 bits, 0 = unclustered, the semantic class in the lower 16; one label per point of
@@ -90,6 +97,7 @@ def segment(
     from flic_cli.runs.spec import SegmentRun, Selection
 
     seqs, frm = _selection(sequences, frames)
+    seqs = [topic] if topic else seqs
     sel = Selection(
         _data_or_sample(data), seqs, frm, setting=setting, ground_remover=ground_remover,
         config=load_config(config), jobs=jobs, skip_bad=skip_bad,
@@ -100,19 +108,36 @@ def segment(
     typer.echo(summary.line())
 
 
-@app.command(epilog="Example: `flic sample /tmp/flic-sample --frames 50`")
+@app.command(
+    epilog="Examples: `flic sample /tmp/flic-sample --frames 50`, "
+    "`flic sample /tmp/vlp16 --sensor vlp16 --frames 10`"
+)
 @friendly_errors
 def sample(
     out: Annotated[Path, typer.Argument(help="Output folder.")],
     frames: Annotated[int, typer.Option("--frames", help="Number of frames (>= 1).")] = 20,
     seed: Annotated[int, typer.Option(help="Scene seed.")] = 0,
+    sensor: Annotated[
+        str,
+        typer.Option(
+            help="Sensor profile: vlp16, vlp32c, hdl32e, hdl64e (the default), os1-64, os1-128, "
+            "os2-128. Other than hdl64e: the SemanticKITTI sequence only, cast with that "
+            "sensor's beam table and columns, and OUT/sensor.toml, the `--config` that reads it."
+        ),
+    ] = "hdl64e",
 ) -> None:
     """Write the deterministic synthetic sample: a SemanticKITTI sequence (with labels) and the
     same scenes as a Moosmann-style log (16-bit PNG + img.cfg)."""
     from flic_cli.sample import write_sample
 
-    paths = write_sample(out, frames=frames, seed=seed)
-    typer.echo(f"wrote {frames} frames: {paths.kitti_root} and {paths.moosmann_log}")
+    paths = write_sample(out, frames=frames, seed=seed, sensor=sensor)
+    if paths.config is None:
+        typer.echo(f"wrote {frames} frames: {paths.kitti_root} and {paths.moosmann_log}")
+    else:
+        typer.echo(
+            f"wrote {frames} frames ({sensor}): {paths.kitti_root}; read it with "
+            f"--config {paths.config}"
+        )
 
 
 @app.command(

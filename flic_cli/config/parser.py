@@ -42,12 +42,18 @@ def defaults_path() -> Path:
 
 
 def _read_toml(path: Path) -> dict[str, Any]:
-    if not path.is_file():
+    if path.is_dir():
+        raise FlicInputError(path, "is a folder, expected a TOML config file")
+    if not path.exists():
         raise FlicInputError(path, "config file does not exist")
+    if not path.is_file():  # a FIFO or a device would block or never end
+        raise FlicInputError(path, "is not a regular file, expected a TOML config file")
     try:
         return tomllib.loads(path.read_text("utf-8"))
     except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
         raise FlicInputError(path, f"is not valid TOML ({exc})") from None
+    except OSError as exc:
+        raise FlicInputError(path, f"cannot be read ({exc.strerror})") from None
 
 
 def _merge(base: dict[str, Any], over: dict[str, Any]) -> dict[str, Any]:

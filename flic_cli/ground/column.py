@@ -644,38 +644,25 @@ def _cell_inputs(image: RangeImage, exact: bool) -> tuple:
 
 
 @functools.lru_cache(maxsize=64)
-def _param_vector(
-    sensor_height_m: float,
-    noise_m: float,
-    slope_change_deg: float,
-    kerb_m: float,
-    max_step_m: float,
-    flat_deg: float,
-    seed_tolerance_m: float,
-    base_band_m: float,
-    neighbour_px: int,
-    neighbour_band_m: float,
-    foot_deg: float,
-    under_m: float,
-    attach_m: float,
-    face_deg: float,
-) -> np.ndarray:
-    """The parameters in the ``_P_*`` layout of :func:`_column_ground` (cached per setting)."""
+def _param_vector(remover: ColumnGround) -> np.ndarray:
+    """The parameters of ``remover`` in the ``_P_*`` layout of :func:`_column_ground`, angles as
+    tangents (cached per setting)."""
+    r = remover
     p = np.zeros(_P_LEN)
-    p[_P_SENSOR] = sensor_height_m
-    p[_P_NOISE] = noise_m
-    p[_P_TAN_CHANGE] = np.tan(np.radians(slope_change_deg))
-    p[_P_KERB] = kerb_m
-    p[_P_MAX_STEP] = max_step_m
-    p[_P_TAN_FLAT] = np.tan(np.radians(flat_deg))
-    p[_P_SEED_TOL] = seed_tolerance_m
-    p[_P_BASE_BAND] = base_band_m
-    p[_P_NB_PX] = neighbour_px
-    p[_P_NB_BAND] = neighbour_band_m
-    p[_P_TAN_FOOT] = np.tan(np.radians(foot_deg))
-    p[_P_UNDER] = under_m
-    p[_P_ATTACH_SQ] = attach_m**2
-    p[_P_TAN_FACE] = np.tan(np.radians(face_deg)) if face_deg < 90.0 else np.inf
+    p[_P_SENSOR] = r.sensor_height_m
+    p[_P_NOISE] = r.noise_m
+    p[_P_TAN_CHANGE] = np.tan(np.radians(r.slope_change_deg))
+    p[_P_KERB] = r.kerb_m
+    p[_P_MAX_STEP] = r.max_step_m
+    p[_P_TAN_FLAT] = np.tan(np.radians(r.flat_deg))
+    p[_P_SEED_TOL] = r.seed_tolerance_m
+    p[_P_BASE_BAND] = r.base_band_m
+    p[_P_NB_PX] = r.neighbour_px
+    p[_P_NB_BAND] = r.neighbour_band_m
+    p[_P_TAN_FOOT] = np.tan(np.radians(r.foot_deg))
+    p[_P_UNDER] = r.under_m
+    p[_P_ATTACH_SQ] = r.attach_m**2
+    p[_P_TAN_FACE] = np.tan(np.radians(r.face_deg)) if r.face_deg < 90.0 else np.inf
     p.setflags(write=False)
     return p
 
@@ -741,24 +728,8 @@ class ColumnGround:
         points : (N, 3) the scan's points, pixel ``image.point_pixel[i]`` for point i; read by
             step 7 only (a projected scan), None elsewhere.
         """
-        params = _param_vector(
-            float(self.sensor_height_m),
-            float(self.noise_m),
-            float(self.slope_change_deg),
-            float(self.kerb_m),
-            float(self.max_step_m),
-            float(self.flat_deg),
-            float(self.seed_tolerance_m),
-            float(self.base_band_m),
-            int(self.neighbour_px),
-            float(self.neighbour_band_m),
-            float(self.foot_deg),
-            float(self.under_m),
-            float(self.attach_m),
-            float(self.face_deg),
-        )
         mask, held, cells, standers = _column_ground(
-            *pixel_geometry(image, self.point_heights), params
+            *pixel_geometry(image, self.point_heights), _param_vector(self)
         )
         decided, clustered = None, image
         per_point = self.point_ground(image, points, mask)

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import io
 import re
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -26,7 +27,8 @@ RANGE_SCALE = 500.0
 _PNG_MAX = int(np.iinfo(np.uint16).max)
 """Largest value of a 16-bit PNG pixel."""
 
-_SCAN_NAME = re.compile(r"scan(\d+)\.png")
+_SCAN_NAME = re.compile(r"scan([0-9]+)\.png")  # ASCII digits only (not \d: other scripts' digits)
+_NOT_ASCII = "left out: frame numbers are written in the digits 0-9"
 _PNG_COLOUR_TYPES = {
     0: "greyscale",
     2: "RGB",
@@ -85,6 +87,8 @@ def read_img_cfg(path: str | Path) -> ImgCfg:
             values.append(float(field))
         except ValueError:
             raise FlicInputError(path, f"field {i} {field!r} is not a number") from None
+        if not np.isfinite(values[-1]):
+            raise FlicInputError(path, f"field {i} {field!r} is not a finite number")
     for name, v in (("width", values[0]), ("height", values[1])):
         if v != int(v) or v < 1:
             raise FlicInputError(path, f"image {name} {v:g} is not a positive integer")
@@ -300,12 +304,27 @@ def read_label_image(path: str | Path, cfg: ImgCfg) -> np.ndarray:
 
 
 def _scan_frames(folder: Path) -> dict[int, Path]:
-    """``scanNNNNN.png`` files of a folder by frame number."""
-    out = {}
-    for p in folder.glob("scan*.png"):
+    """``scanNNNNN.png`` files of a folder by frame number (ASCII digits; other names are not
+    frames).
+
+    Raises
+    ------
+    FlicInputError
+        When two files name the same frame number (``scan0001.png`` and ``scan00001.png``): the
+        frame would be counted twice and its predictions overwritten.
+    """
+    out: dict[int, Path] = {}
+    for p in sorted(folder.glob("scan*.png")):
         m = _SCAN_NAME.fullmatch(p.name)
+        if m is None and re.fullmatch(r"scan\d+\.png", p.name):
+            warnings.warn(f"{p}: {_NOT_ASCII}", stacklevel=2)
         if m:
-            out[int(m.group(1))] = p
+            frame = int(m.group(1))
+            if frame in out:
+                raise FlicInputError(
+                    p, f"names frame {frame} like {out[frame].name}: keep one of the two files"
+                )
+            out[frame] = p
     return dict(sorted(out.items()))
 
 
@@ -315,6 +334,12 @@ def _log_layout(folder: Path) -> tuple[Path, Path] | None:
     A log holds ``scan*.png`` directly or in ``range/``, and an ``img.cfg`` beside the PNGs or in
     the folder above them. A folder with ``img.cfg`` but no scans is a log without frames.
     """
+    if _scan_frames(folder) and _scan_frames(folder / "range"):
+        raise FlicInputError(
+            folder,
+            "holds scan*.png range images both directly and in range/: which are the log's is "
+            "unclear, keep them in one of the two folders",
+        )
     for scans in (folder, folder / "range"):
         if _scan_frames(scans):
             for cfg in (scans / "img.cfg", scans.parent / "img.cfg"):

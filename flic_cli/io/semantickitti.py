@@ -18,7 +18,7 @@ import numpy as np
 from numba import njit
 
 from flic_cli.errors import FlicInputError
-from flic_cli.io.atomic import atomic_write_bytes, read_text
+from flic_cli.io.atomic import atomic_write_bytes, open_regular, read_text
 from flic_cli.io.base import Frame, FrameRef, frames_text, in_frames, select_sequences
 from flic_cli.labels import encode, instance, semantic
 from flic_cli.range_image import RangeImage
@@ -66,7 +66,7 @@ def _read_array(path: str | Path, dtype: str, record: int, what: str) -> np.ndar
         When the file is missing or unreadable, or its size is not a multiple of ``record``.
     """
     try:
-        with open(path, "rb", buffering=0) as f:
+        with open_regular(path) as f:
             size = os.fstat(f.fileno()).st_size
             if size % record:
                 raise FlicInputError(
@@ -520,8 +520,24 @@ class SemanticKittiDataset:
                 found = {s: d for s, d in found.items() if s not in unlabelled}
         self._refs: list[FrameRef] = []
         for name, seq_dir in found.items():
+            seen: dict[int, Path] = {}
             for bin_path in sorted((seq_dir / "velodyne").glob("*.bin")):
-                if not bin_path.stem.isdigit() or not in_frames(int(bin_path.stem), frames):
+                if not bin_path.stem.isdigit():
+                    continue
+                if not bin_path.stem.isascii():  # e.g. "00①" or Arabic-Indic digits
+                    warnings.warn(
+                        f"{bin_path}: left out: frame numbers are written in the digits 0-9",
+                        stacklevel=2,
+                    )
+                    continue
+                number = int(bin_path.stem)
+                if number in seen:
+                    raise FlicInputError(
+                        bin_path,
+                        f"names frame {number} like {seen[number].name}: keep one of the two files",
+                    )
+                seen[number] = bin_path
+                if not in_frames(number, frames):
                     continue
                 label_path = seq_dir / "labels" / f"{bin_path.stem}.label"
                 self._refs.append(

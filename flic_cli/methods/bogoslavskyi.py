@@ -9,8 +9,8 @@ from pydantic import Field
 from pydantic.dataclasses import dataclass
 
 from flic_cli.component import STRICT
-from flic_cli.methods._unionfind import ANGLE, run_kernel
 from flic_cli.methods.base import ground_parts, point_weights
+from flic_cli.methods.connections import ANGLE, run_kernel
 from flic_cli.methods.flic import cached_sets
 from flic_cli.range_image import RangeImage
 

@@ -56,18 +56,19 @@ from pydantic.dataclasses import dataclass
 
 from flic_cli.bitwords import pack, trailing_zeros
 from flic_cli.component import STRICT
-from flic_cli.methods._unionfind import (
-    _attach,
-    _label_row,
-    _number,
-    _run_buffers,
-    _union,
+from flic_cli.methods.base import ground_parts, point_weights
+from flic_cli.methods.criteria import distance_edge
+from flic_cli.methods.engine import (
+    attach,
     attached_input,
     kernel_inputs,
+    label_row,
+    number,
     pixel_output,
     point_output,
+    run_buffers,
+    union,
 )
-from flic_cli.methods.base import ground_parts, point_weights
 from flic_cli.range_image import RangeImage
 
 if TYPE_CHECKING:
@@ -191,7 +192,7 @@ def _walk_row(
                 # the bound (nothing from here on can be linked), a link, free space beside p (a
                 # farther node, or a range beyond p outside the mask)
                 bound = d * sin_k >= tp
-                linked = (dq > 0.0) & (d * d + dq * dq - 2.0 * cos_k * d * dq < tp2)
+                linked = (dq > 0.0) & distance_edge(d, dq, cos_k, tp2)
                 free = (dq > d) | ((dq <= 0.0) & (raw[q] > d))
                 link_c[n_links] = c
                 link_q[n_links] = q
@@ -200,7 +201,7 @@ def _walk_row(
                 going += 1 - np.int64(bound | linked | free)
             m = going
         for t in range(n_links):
-            _union(parent, labels[row + link_c[t]], labels[link_q[t]])
+            union(parent, labels[row + link_c[t]], labels[link_q[t]])
 
 
 @njit(cache=True, inline="always")
@@ -226,7 +227,7 @@ def _first_steps(
         t = dd * sin_gamma
         tp = threshold if threshold >= t else t
         ok = (dd > 0.0) & (dd * sin_1 < tp)
-        linked = ok & (q > 0.0) & (dd * dd + q * q - 2.0 * cos_1 * dd * q < tp * tp)
+        linked = ok & (q > 0.0) & distance_edge(dd, q, cos_1, tp * tp)
         free = ((q > 0.0) & (q > dd)) | ((q <= 0.0) & (rq[c] > dd))
         link[c] = linked
         on[c] = ok & ~linked & ~free & further
@@ -250,12 +251,12 @@ def _bridge_components(
     """Provisional label of every pixel (0 = no node) and the final label of each provisional
     label (0 = dropped): the connected components of the Bridge graph (module docstring); the
     held pixels of ``attached`` take the label standing on them
-    (:func:`flic_cli.methods._unionfind.connect`).
+    (:func:`flic_cli.methods.connections.components`).
 
     The first step of every walk (left, up, up-left, up-right) is decided for a whole row at once
     (:func:`_first_steps`: link, stop or go on). The first-step links left and up are FLIC's
     direct connections with Bridge's test, so the rows are labelled by runs like FLIC's
-    (:func:`flic_cli.methods._unionfind._label_row`); first-step diagonal links of the nodes not
+    (:func:`flic_cli.methods.engine.label_row`); first-step diagonal links of the nodes not
     inside a surface (linked both left and up) merge labels from packed flags; the walks that go
     on are advanced step by step by :func:`_walk_row`. The labels are those of the pixel-by-pixel
     union-find this replaced (``tests/reference_kernels.py``).
@@ -268,7 +269,7 @@ def _bridge_components(
     nodes = np.empty(n, dtype=np.float32)  # node ranges, 0 elsewhere
     (
         labels, parent, size, node, left, up, node_w, left_w, left_up_w, up_w, starts, ends, acc
-    ) = _run_buffers(n, w)  # fmt: skip
+    ) = run_buffers(n, w)  # fmt: skip
     nw = node_w.size - 1
     pad = 64 * nw + 8
     left_on = np.zeros(pad, dtype=np.uint8)  # the left walk goes past its first step
@@ -345,13 +346,13 @@ def _bridge_components(
                 ur[w - 1 : w], ur_on[w - 1 : w], d[w - 1 :], above[:1], raw_above[:1],
                 threshold, sin_gamma, c1, s1, on,
             )  # fmt: skip
-        n_labels = _label_row(
+        n_labels = label_row(
             r, w, n_labels, d, node, left, up, node_w, left_w, left_up_w, up_w, starts, ends, acc,
             labels, parent, size, wf, use_weights,
         )  # fmt: skip
         left_w, left_up_w = left_up_w, left_w
         if seam:
-            _union(parent, labels[row], labels[row + w - 1])
+            union(parent, labels[row], labels[row + w - 1])
         # The diagonal walks of nodes not inside a surface (linked left and up at the first
         # step): links at their first step are merged here; walks going on past their first
         # step, in any direction, are walked one by one.
@@ -377,21 +378,21 @@ def _bridge_components(
                     c = 64 * k + np.int64(trailing_zeros(bits))
                     bits &= bits - one
                     j = row - w + (c - 1 if c > 0 else w - 1)
-                    _union(parent, labels[row + c], labels[j])
+                    union(parent, labels[row + c], labels[j])
                 bits = ur_w[k]
                 while bits:
                     c = 64 * k + np.int64(trailing_zeros(bits))
                     bits &= bits - one
                     j = row - w + (c + 1 if c < w - 1 else 0)
-                    _union(parent, labels[row + c], labels[j])
+                    union(parent, labels[row + c], labels[j])
         pack(left_on[: 64 * nw], on_w[0])
         pack(up_on[: 64 * nw], on_w[1])
         _walk_row(
             r, w, on_w, nodes, rf, labels, parent, cos_t, sin_t, threshold, sin_gamma, k_row,
             k_up, walks, link_c, link_q,
         )  # fmt: skip
-    _attach(labels, size, attached)
-    return labels[:n], _number(parent, size, np.int64(n_labels), min_size)
+    attach(labels, size, attached)
+    return labels[:n], number(parent, size, np.int64(n_labels), min_size)
 
 
 #: (elevation bytes, width, reach) -> walk_tables; cleared when full
@@ -440,7 +441,7 @@ def run_bridge(
 ) -> np.ndarray:
     """Bridge labels per pixel, or per point given ``point_pixel`` (see :func:`bridge_labels`;
     ``skip``: pixels left out even with a range, e.g. ground; ``attached``: held pixels, see
-    :func:`flic_cli.methods._unionfind.connect`)."""
+    :func:`flic_cli.methods.connections.components`)."""
     if reach_px < 1:
         raise ValueError(f"reach_px must be >= 1, got {reach_px}")
     ranges, elevation, skip, use_skip, weights, use_weights = kernel_inputs(

@@ -55,16 +55,83 @@ def raw_dbscan(
     if backend == "sklearn":
         from sklearn.cluster import DBSCAN
 
-        est = DBSCAN(eps=eps_m, min_samples=min_samples, n_jobs=1).fit(xyz)
+        weight, inverse = None, None
+        if neighbour_pairs_bound(xyz, eps_m) > MAX_NEIGHBOUR_PAIRS:
+            # coinciding points: one point per place, weighted by its count (DBSCAN with
+            # sample_weight gives every copy the labels of its place)
+            unique, inverse, weight = np.unique(
+                xyz, axis=0, return_inverse=True, return_counts=True
+            )
+            xyz, inverse = unique, inverse.reshape(-1)
+            if neighbour_pairs_bound(xyz, eps_m) > MAX_NEIGHBOUR_PAIRS:
+                from sklearn.neighbors import KDTree  # the exact count, in O(N) memory
+
+                pairs = int(KDTree(xyz).query_radius(xyz, eps_m, count_only=True).sum())
+                if pairs > MAX_NEIGHBOUR_PAIRS:
+                    raise FlicInputError(
+                        None,
+                        f"DBSCAN: {points.shape[0]} points lie too densely for eps {eps_m:g} m: "
+                        f"{pairs:.3g} neighbour pairs, beyond the budget of "
+                        f"{MAX_NEIGHBOUR_PAIRS:.3g} (flic_cli.methods.dbscan."
+                        "MAX_NEIGHBOUR_PAIRS, 8 bytes each); use a smaller eps_m",
+                    )
+        est = DBSCAN(eps=eps_m, min_samples=min_samples, n_jobs=1).fit(xyz, sample_weight=weight)
         core = np.zeros(xyz.shape[0], dtype=bool)
         core[est.core_sample_indices_] = True
-        return est.labels_.astype(np.int64), core
+        labels = est.labels_.astype(np.int64)
+        if inverse is not None:
+            return labels[inverse], core[inverse]
+        return labels, core
     if backend == "fastdbscan":
         from dbscan import DBSCAN as fast_dbscan
 
         labels, core = fast_dbscan(xyz, eps=float(eps_m), min_samples=int(min_samples))
         return np.asarray(labels, dtype=np.int64), np.asarray(core, dtype=bool)
     raise ValueError(f"unknown DBSCAN backend {backend!r} ({' | '.join(BACKENDS)})")
+
+
+#: The memory bound of the ``sklearn`` backend, in neighbour pairs. scikit-learn's DBSCAN stores
+#: every point's whole neighbourhood (8 bytes per pair), so points that coincide, or nearly so,
+#: take O(N^2) memory: 20 GB and more for one frame. 5e8 pairs = 3.7 GiB. Whole SemanticKITTI
+#: scans (124 k points) have 3.5e7 pairs at eps 0.5 m and 2.5e8 at 1.5 m (grid bound 9.8e7 and
+#: 6.1e8, the densest of ten shared frames). When the grid bound
+#: (:func:`neighbour_pairs_bound`) exceeds it, :func:`raw_dbscan` merges coinciding points into one
+#: point weighted by their number (``sample_weight``: the same DBSCAN), then counts the pairs
+#: exactly (a KD-tree, O(N) memory) and refuses the frame, with an error naming it, only if
+#: they still exceed the budget.
+MAX_NEIGHBOUR_PAIRS = 500_000_000
+
+
+def neighbour_pairs_bound(xyz: np.ndarray, eps_m: float) -> int:
+    """An upper bound of the ordered point pairs within ``eps_m`` (self pairs included), in O(N).
+
+    Every pair within ``eps_m`` lies in the same or in adjacent cells of a grid of side
+    ``eps_m``, so the sum over cells of (points in the cell) x (points in its 27 cells) bounds
+    their number from above (by about 27 / (4/3 pi) = 6.4 times for evenly spread points).
+
+    Parameters
+    ----------
+    xyz : (N, 3) float64 metres, finite.
+    eps_m : neighbourhood radius, metres.
+    """
+    if xyz.shape[0] == 0:
+        return 0
+    cells = np.floor(xyz / eps_m).astype(np.int64)
+    cells -= cells.min(axis=0) - 1  # >= 1, so that the neighbours' keys stay >= 0
+    span = cells.max(axis=0) + 2
+    if float(np.prod(span.astype(np.float64))) >= 2.0**62:
+        return int(xyz.shape[0]) ** 2  # cannot key the cells: assume the worst
+    keys, counts = np.unique(
+        (cells[:, 0] * span[1] + cells[:, 1]) * span[2] + cells[:, 2], return_counts=True
+    )
+    around = np.zeros(keys.size, dtype=np.int64)
+    for dx in (-1, 0, 1):
+        for dy in (-1, 0, 1):
+            for dz in (-1, 0, 1):
+                other = keys + (dx * span[1] + dy) * span[2] + dz
+                at = np.minimum(np.searchsorted(keys, other), keys.size - 1)
+                around += np.where(keys[at] == other, counts[at], 0)
+    return int(np.dot(counts, around))
 
 
 @dataclass(frozen=True, config=STRICT)

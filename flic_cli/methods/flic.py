@@ -10,8 +10,8 @@ from pydantic import Field, NonNegativeInt, field_validator
 from pydantic.dataclasses import dataclass
 
 from flic_cli.component import STRICT
-from flic_cli.methods._unionfind import DISTANCE, run_kernel
 from flic_cli.methods.base import ground_parts, point_weights
+from flic_cli.methods.connections import DISTANCE, run_kernel
 from flic_cli.range_image import RangeImage
 
 if TYPE_CHECKING:
@@ -36,7 +36,7 @@ def connection_sets(
     Returns
     -------
     steps (M, 2), offsets (M, 2), lattice (M,) arrays for
-    :func:`flic_cli.methods._unionfind.connect`.
+    :func:`flic_cli.methods.connections.components`.
     """
     if mc_mode not in MC_MODES:
         raise ValueError(f"mc_mode must be one of {MC_MODES}, got {mc_mode!r}")
@@ -176,7 +176,7 @@ def flic_labels_scipy(
     labels, merged by ``scipy.sparse.csgraph.connected_components``. Kept as the reference (the
     tests check the numba kernel against it) and as the paper-style peer in benchmarks
     (``backend = "scipy"``). Parameters as :func:`flic_labels`; ``attached``: held pixels, see
-    :func:`flic_cli.methods._unionfind.connect`.
+    :func:`flic_cli.methods.connections.components`.
     """
     from scipy import ndimage
     from scipy.sparse import coo_matrix

@@ -48,6 +48,10 @@ Outputs (all written atomically)
 ``environment.json``
     CPU, cores, Python and library versions, threads in effect, command line, date, the run's
     parameters and the warm-up (first-call) times.
+``latency.csv`` (recordings: bags, pcaps)
+    Per method and revolution, decode + range image + ground + cluster in recording order, each
+    stage timed (:mod:`flic_cli.runs.latency`); the report says whether the p99 keeps up with
+    10 / 20 Hz.
 ``runtime.png``, ``boxplot_hz.png``, ``histogram.png``
     Per-frame runtime over the log on a log scale (paper Fig. 9), box plot of the per-frame rate
     in Hz (Fig. 10), runtime histograms.
@@ -71,9 +75,10 @@ from flic_cli.io import open_dataset
 from flic_cli.io.atomic import atomic_write, write_table
 from flic_cli.io.base import FrameRef
 from flic_cli.projection import Projection
+from flic_cli.runs import latency
 from flic_cli.runs.environment import collect_environment, environment_line, thread_limits
 from flic_cli.runs.frames import FrameLoop, sort_skipped, write_skipped
-from flic_cli.runs.output import check_output_dir
+from flic_cli.runs.output import check_output_dir, holding_out_lock
 from flic_cli.runs.pipeline import Segmenter, build_segmenters, prepare
 from flic_cli.runs.spec import BenchmarkRun
 
@@ -388,6 +393,7 @@ class BenchJob:
         ]
 
 
+@holding_out_lock
 def run_benchmark(spec: BenchmarkRun) -> BenchmarkResult:
     """Time every method on every selected frame and write the tables, plots and environment.
 
@@ -509,6 +515,10 @@ def run_benchmark(spec: BenchmarkRun) -> BenchmarkResult:
     write_table(files[1], summary)
     write_table(files[2], hist)
     _write_json(env, files[3])
+    if getattr(ds, "format", None) in latency.STREAMS:  # a recording: latency per revolution
+        lat = latency.measure(ds, refs, segs, setting, config.projection, progress)
+        files.append(write_table(out / "latency.csv", lat))
+        notes += latency.report(lat)
     if plots:
         name = Path(data).name or str(data)
         files += _plots(table, methods, out, f"{name}, {timed_frames} frames, {setting} setting")

@@ -36,8 +36,8 @@ from flic_cli.io import open_dataset
 from flic_cli.io.atomic import write_table
 from flic_cli.io.base import Dataset, FrameRef
 from flic_cli.runs.frames import FrameLoop, Skipped, sort_skipped, write_skipped
-from flic_cli.runs.output import check_output_dir
-from flic_cli.runs.parallel import resolve_jobs
+from flic_cli.runs.output import check_output_dir, holding_out_lock
+from flic_cli.runs.parallel import SchedulerError, check_scheduler, resolve_jobs
 from flic_cli.runs.pipeline import build_segmenters
 from flic_cli.runs.scoring import (
     FRAME_COLUMNS,
@@ -111,7 +111,7 @@ def estimate_line(
     )
     if scheduler is not None:
         return line + "; divide by the number of dask worker threads"
-    workers = resolve_jobs(jobs)
+    workers = resolve_jobs(jobs, remaining)
     return line + (f" / {workers} processes = {_duration(total / workers)}" if workers > 1 else "")
 
 
@@ -216,6 +216,7 @@ def run_parameters(
     return json.loads(json.dumps(params, default=str))
 
 
+@holding_out_lock
 def run_evaluate(spec: EvaluateRun) -> EvaluateResult:
     """Evaluate methods on every selected labelled frame and write the tables to ``spec.out``.
 
@@ -229,7 +230,9 @@ def run_evaluate(spec: EvaluateRun) -> EvaluateResult:
     ------
     FlicInputError
         On bad input: unknown setting or method, missing labels, a bad frame (without
-        ``skip_bad``), an ``out`` folder that cannot be used or holds another run.
+        ``skip_bad``) or every frame bad (with ``skip_bad``), an ``out`` folder that cannot be
+        used, holds another run or is in use by a run still going (``out`` is locked for the
+        run, :func:`flic_cli.io.atomic.locked_folder`).
     """
     sel = spec.selection
     config = sel.loaded_config()
@@ -242,6 +245,7 @@ def run_evaluate(spec: EvaluateRun) -> EvaluateResult:
         raise FlicInputError(None, f"--setting must be one of {', '.join(EVAL_SETTINGS)}")
     if semantics not in ("none", "oracle"):
         raise FlicInputError(None, f"--semantics must be none or oracle, got {semantics!r}")
+    check_scheduler(spec.scheduler)
     bench = None if spec.runtimes is None else read_runtimes(Path(spec.runtimes))
     settings = EVAL_SETTINGS[setting]
     methods = list(dict.fromkeys(spec.methods))
@@ -259,7 +263,8 @@ def run_evaluate(spec: EvaluateRun) -> EvaluateResult:
         sel.data, config, methods, settings, ground_remover, sel.sequences, sel.frames
     )
     params["semantics"] = semantics
-    done = open_store(out, params, spec.resume)
+    kinds = ("objects", "ground") + (("panoptic",) if spec.semantics == "oracle" else ())
+    done = open_store(out, params, spec.resume, kinds)
     todo = [r for r in refs if (r.sequence, r.frame) not in done]
     resumed = len(refs) - len(todo)
     if spec.on_start is not None:
@@ -293,6 +298,8 @@ def run_evaluate(spec: EvaluateRun) -> EvaluateResult:
             spec.on_estimate(estimate_line(timing, len(rest), jobs, scheduler))
         for ref, scores in loops[1]:
             write_part(parts, ref.sequence, ref.frame, scores.tables())
+    except SchedulerError:
+        raise  # not a bad frame: the hint below does not apply
     except FlicInputError as exc:
         raise FlicInputError(
             exc.path,
@@ -300,6 +307,13 @@ def run_evaluate(spec: EvaluateRun) -> EvaluateResult:
             "on past bad frames)",
         ) from None
     skipped = loops[0].skipped + loops[1].skipped
+    if skipped and len(skipped) == len(refs):
+        write_skipped(out / "skipped.csv", sort_skipped(skipped))
+        raise FlicInputError(
+            sel.data,
+            f"every selected frame is bad ({len(skipped)}, listed in {out / 'skipped.csv'}): "
+            "nothing to evaluate",
+        )
     # 5. the tables, from the stored records of the selected frames
     bad = {(s.sequence, s.frame) for s in skipped}
     keys = [(r.sequence, r.frame) for r in refs if (r.sequence, r.frame) not in bad]

@@ -16,6 +16,7 @@ every command behaves the same:
 from __future__ import annotations
 
 import csv
+import os
 import sys
 import warnings
 from collections.abc import Callable, Iterable, Iterator
@@ -28,7 +29,7 @@ from tqdm import tqdm
 from flic_cli.errors import FlicInputError, print_warning
 from flic_cli.io.atomic import atomic_write
 from flic_cli.io.base import FrameRef
-from flic_cli.runs.parallel import imap_frames
+from flic_cli.runs.parallel import imap_frames, jobs_note, resolve_jobs
 
 R = TypeVar("R")
 
@@ -62,8 +63,8 @@ class FrameTask(Generic[R]):
             warnings.simplefilter("always")
             try:
                 value = self.func(ref)
-            except FlicInputError as exc:
-                path = None if exc.path is None else str(exc.path)
+            except FlicInputError as exc:  # an error naming no file is about this frame's
+                path = str(ref.path if exc.path is None else exc.path)
                 return Outcome(ref, error=(path, exc.reason), warnings=_texts(caught, ref))
         return Outcome(ref, value, warnings=_texts(caught, ref))
 
@@ -138,7 +139,23 @@ class FrameLoop(Generic[R]):
         self.total = len(self.refs) + initial if total is None else total
         self.skipped: list[Skipped] = []
 
+    def _outcomes(self) -> Iterator[Outcome[R]]:
+        """The outcomes; on a fresh install (numba's cache empty) the first frame runs here,
+        so that the kernels are compiled once and cached, not by every worker at the same time."""
+        jobs = self.jobs
+        if self.scheduler is None:
+            note = jobs_note(jobs, len(self.refs))
+            if note is not None and self.progress:
+                tqdm.write(note, file=sys.stderr)
+            jobs = resolve_jobs(jobs, len(self.refs))
+        first = self.refs[:1] if jobs != 1 and not kernels_cached() else []
+        yield from imap_frames(self.task, first, 1, None)
+        if self.refs[len(first) :]:  # (no scheduler to contact for no frames)
+            yield from imap_frames(self.task, self.refs[len(first) :], jobs, self.scheduler)
+
     def __iter__(self) -> Iterator[tuple[FrameRef, R]]:
+        if self.progress and self.refs and not kernels_cached():
+            tqdm.write(COMPILE_NOTE, file=sys.stderr)
         with tqdm(
             total=self.total,
             initial=self.initial,
@@ -147,7 +164,7 @@ class FrameLoop(Generic[R]):
             disable=not self.progress,
             file=sys.stderr,
         ) as bar:
-            for outcome in imap_frames(self.task, self.refs, self.jobs, self.scheduler):
+            for k, outcome in enumerate(self._outcomes()):
                 for text in outcome.warnings:
                     print_warning(text)
                 if outcome.error is not None:
@@ -162,12 +179,42 @@ class FrameLoop(Generic[R]):
                 else:
                     yield outcome.ref, outcome.value  # type: ignore[misc]
                 bar.update(1)
+                if k == 0 and not bar.disable:
+                    _restart_rate(bar)
 
     def note(self) -> str | None:
         """A summary line about skipped frames, or None when none was skipped."""
         if not self.skipped:
             return None
         return f"skipped {len(self.skipped)} bad frame(s) (--skip-bad), listed in skipped.csv"
+
+
+#: Said before the first frame when numba's cache of flic's kernels is empty.
+COMPILE_NOTE = (
+    "note: first run of this installation: numba compiles flic's kernels during the first "
+    "frame, about one to two minutes (once: they are cached for later runs)"
+)
+
+
+def kernels_cached() -> bool:
+    """Whether numba's cache holds compiled kernels of flic (else the first frame compiles them).
+
+    Looks for numba's index files (``*.nbi``) in ``NUMBA_CACHE_DIR`` when it is set (numba
+    then caches there), else beside flic's modules.
+    """
+    import flic_cli
+
+    place = Path(os.environ.get("NUMBA_CACHE_DIR") or Path(flic_cli.__file__).parent)
+    return place.is_dir() and next(place.rglob("*.nbi"), None) is not None
+
+
+def _restart_rate(bar: tqdm) -> None:
+    """Start the bar's rate and ETA afresh after the first frame, which also loads (on a fresh
+    install: compiles) the kernels and would make the estimate far too long."""
+    n = bar.n
+    bar.reset(bar.total)
+    bar.initial = bar.n = bar.last_print_n = n
+    bar.refresh()
 
 
 def write_skipped(path: Path, skipped: list[Skipped]) -> Path:

@@ -2,10 +2,17 @@
 
 from __future__ import annotations
 
+import functools
+import inspect
 import os
+from collections.abc import Callable
 from pathlib import Path
+from typing import Any, TypeVar
 
 from flic_cli.errors import FlicInputError
+from flic_cli.io.atomic import locked_folder
+
+F = TypeVar("F", bound=Callable[..., Any])
 
 
 def check_output_dir(out: Path, inputs: list[Path] | tuple[Path, ...] = ()) -> Path:
@@ -44,3 +51,24 @@ def check_output_dir(out: Path, inputs: list[Path] | tuple[Path, ...] = ()) -> P
         what = "is not writable" if probe == resolved else f"cannot be created in {probe}"
         raise FlicInputError(out, f"output folder {what} (permission denied)")
     return out
+
+
+def holding_out_lock(func: F) -> F:
+    """Run ``func`` (a run with an ``out`` parameter, or a ``spec`` with an ``out`` field)
+    holding the lock of its output folder.
+
+    Two runs into one ``--out`` would mix their results: the second is refused with a one-line
+    error while the first holds the lock (:func:`flic_cli.io.atomic.locked_folder`, released
+    by the kernel however the process ends).
+    """
+    signature = inspect.signature(func)
+
+    @functools.wraps(func)
+    def wrapper(*args: Any, **kwargs: Any) -> Any:
+        arguments = signature.bind(*args, **kwargs).arguments
+        out = Path(arguments["out"] if "out" in arguments else arguments["spec"].out)
+        check_output_dir(out)
+        with locked_folder(out):
+            return func(*args, **kwargs)
+
+    return wrapper  # type: ignore[return-value]

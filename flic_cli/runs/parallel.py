@@ -11,6 +11,7 @@ parallelism is over frames, and nested thread pools would only oversubscribe the
 from __future__ import annotations
 
 import os
+import re
 from collections.abc import Callable, Iterable, Iterator
 from typing import Any, TypeVar
 
@@ -44,21 +45,77 @@ class SingleThreaded:
             return self.func(item)
 
 
-def resolve_jobs(jobs: int) -> int:
-    """``--jobs``: a positive count, or 0 / negative for one process per CPU core.
+def cpu_cores() -> int:
+    """CPU cores this process may run on (at least 1)."""
+    return max(1, len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else 1)
+
+
+def resolve_jobs(jobs: int, items: int | None = None) -> int:
+    """``--jobs``: a positive count, or 0 / negative for one process per CPU core; never more
+    than the CPU cores nor (when given) the items to process.
 
     Parameters
     ----------
     jobs : requested number of processes.
+    items : the number of items (frames); None = unknown.
 
     Returns
     -------
     int
         The number of processes, at least 1.
     """
-    if jobs > 0:
-        return jobs
-    return max(1, len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else 1)
+    cores = cpu_cores()
+    n = min(jobs, cores) if jobs > 0 else cores
+    return max(1, n if items is None else min(n, items))
+
+
+def jobs_note(jobs: int, items: int) -> str | None:
+    """The note the runs print when ``--jobs`` is clamped (:func:`resolve_jobs`), else None."""
+    used = resolve_jobs(jobs, items)
+    if jobs <= 0 or used >= jobs:
+        return None
+    return (
+        f"note: --jobs {jobs}: using {used} process(es) "
+        f"({items} frame(s), {cpu_cores()} CPU core(s))"
+    )
+
+
+class SchedulerError(FlicInputError):
+    """The dask scheduler cannot be used (not installed, a malformed address, unreachable)."""
+
+
+#: ``[protocol://]host:port`` of a dask scheduler (host: a name, IPv4 or [IPv6] address).
+_SCHEDULER = re.compile(
+    r"(?:(?:tcp|tls|ws|wss|ucx|inproc)://)?(?:[A-Za-z0-9._-]+|\[[0-9A-Fa-f:.]+\]):[0-9]{1,5}"
+)
+
+
+def check_scheduler(address: str | None) -> None:
+    """Check a ``--scheduler`` address before any work (None: no scheduler, nothing to check).
+
+    Raises
+    ------
+    SchedulerError
+        When the address is not ``[tcp://]host:port`` (port 1-65535), or dask.distributed is
+        not installed.
+    """
+    if address is None:
+        return
+    m = _SCHEDULER.fullmatch(address.strip())
+    if m is None or not 0 < int(address.rsplit(":", 1)[1]) < 65536:
+        raise SchedulerError(
+            None,
+            f"--scheduler {address!r} is not a dask scheduler address such as "
+            "tcp://10.0.0.5:8786 (protocol://host:port)",
+        )
+    try:
+        import distributed  # noqa: F401
+    except ImportError:
+        raise SchedulerError(
+            None,
+            "--scheduler needs dask.distributed, which is not installed "
+            "(pip install 'flic[distributed]')",
+        ) from None
 
 
 def imap_frames(
@@ -91,6 +148,7 @@ def imap_frames(
     if scheduler is not None:
         yield from _imap_dask(func, items, scheduler)
         return
+    check_scheduler(scheduler)
     jobs = resolve_jobs(jobs)
     if jobs == 1:
         for item in items:
@@ -111,15 +169,16 @@ def _imap_dask(func: Callable[[T], R], items: Iterable[T], scheduler: str) -> It
     try:
         from distributed import Client, as_completed
     except ImportError:
-        raise FlicInputError(
+        raise SchedulerError(
             None,
             "--scheduler needs dask.distributed, which is not installed "
             "(pip install 'flic[distributed]')",
         ) from None
+    check_scheduler(scheduler)
     try:
         client = Client(scheduler, timeout="20s", set_as_default=False)
     except (OSError, TimeoutError, ValueError) as exc:
-        raise FlicInputError(None, f"cannot reach the dask scheduler {scheduler} ({exc})") from None
+        raise SchedulerError(None, f"cannot reach the dask scheduler {scheduler} ({exc})") from None
     try:
         threads = sum(client.nthreads().values()) or 1
         window = max(4, 2 * threads)

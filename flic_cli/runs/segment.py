@@ -15,6 +15,8 @@ clustering), without a ground remover.
 
 from __future__ import annotations
 
+import time
+from contextlib import ExitStack
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -28,8 +30,9 @@ from flic_cli.io.atomic import staged_folder
 from flic_cli.io.base import FrameRef
 from flic_cli.io.ply import write_ply
 from flic_cli.projection import Projection
+from flic_cli.runs import latency
 from flic_cli.runs.frames import FrameLoop, Skipped, sort_skipped, write_skipped
-from flic_cli.runs.output import check_output_dir
+from flic_cli.runs.output import check_output_dir, holding_out_lock
 from flic_cli.runs.pipeline import (
     OWN,
     Prepared,
@@ -44,8 +47,11 @@ from flic_cli.runs.spec import SegmentRun
 #: ``--semantics`` values besides a folder of a semantic network's predictions.
 SEMANTICS = ("none", "oracle")
 
-#: ``--export`` formats.
-EXPORTS = ("ply",)
+#: ``--export`` formats (``mcap`` / ``bag``: a ROS 2 bag of PointCloud2 clusters, bag input only).
+EXPORTS = ("ply", "mcap", "bag")
+
+#: Formats whose frames are revolutions of a recording: the run reports the latency per frame.
+STREAMS = latency.STREAMS
 
 
 @dataclass
@@ -64,6 +70,8 @@ class Segmented:
     labels: np.ndarray
     ground: Ground | None
     semantics: np.ndarray | None = None
+    extra: dict[str, Any] | None = None
+    latency_ms: float = 0.0
 
     @property
     def clusters(self) -> int:
@@ -92,15 +100,19 @@ class SegmentJob:
     semantics: str | None = None
 
     def __call__(self, ref: FrameRef) -> Segmented:
+        start = time.perf_counter()  # latency: decode + range image + ground + cluster
         frame = self.dataset.load(ref)
+        extra = frame.export_fields() if hasattr(frame, "export_fields") else None
         if self.semantics is None:
             prep = prepare(frame, self.setting, self.projection)
             labels, ground = self.segmenter.run(prep.image, prep.points)
-            return Segmented(prep, labels, ground)
+            ms = (time.perf_counter() - start) * 1e3
+            return Segmented(prep, labels, ground, extra=extra, latency_ms=ms)
         semantics = scan_semantics(frame, self.semantics)
         prep = prepare_semantic(frame, semantics, self.projection)
         labels = self.segmenter.method.segment(prep.image, prep.points, None)
-        return Segmented(prep, labels, None, semantics)
+        ms = (time.perf_counter() - start) * 1e3
+        return Segmented(prep, labels, None, semantics, extra=extra, latency_ms=ms)
 
 
 @dataclass
@@ -115,6 +127,8 @@ class SegmentSummary:
     fallbacks: int = 0
     skipped: list[Skipped] = field(default_factory=list)
     renders: list[Path] = field(default_factory=list)
+    latency: str | None = None
+    exports: list[Path] = field(default_factory=list)
 
     def line(self) -> str:
         text = (
@@ -126,9 +140,12 @@ class SegmentSummary:
             text += f", {self.fallbacks} frame(s) projected spherically (ring recovery failed)"
         if self.skipped:
             text += f", skipped {len(self.skipped)} bad frame(s) (skipped.csv)"
+        if self.latency:
+            text += f"; {self.latency}"
         return f"{text} -> {self.out}"
 
 
+@holding_out_lock
 def run_segment(spec: SegmentRun) -> SegmentSummary:
     """Segment every selected frame and write its prediction in the data format's own encoding
     (SemanticKITTI ``<out>/sequences/NN/predictions/XXXXXX.label``).
@@ -167,13 +184,21 @@ def run_segment(spec: SegmentRun) -> SegmentSummary:
         shown = sorted({r.frame for r in refs})
         span = f"{shown[0]}..{shown[-1]}" if len(shown) > 1 else str(shown[0])
         raise FlicInputError(None, f"--render {render}: no such frame among the selected ({span})")
+    bag_exports = [e for e in export if e in ("mcap", "bag")]
+    if bag_exports and ds.format != "bag":
+        raise FlicInputError(sel.data, f"--export {bag_exports[0]} needs a bag or MCAP input")
     seg = build_segmenter(config, method, setting, sel.remover_or(OWN))
     job = SegmentJob(ds, seg, setting, config.projection, wanted)
     loop = FrameLoop(job, refs, sel.jobs, None, sel.skip_bad, f"segment {method}", sel.progress)
     n_points = n_clusters = owned = pixels = fallbacks = 0
     renders = []
-    with staged_folder(out) as stage:
+    latencies: list[float] = []
+    with staged_folder(out) as stage, ExitStack() as writers:
+        bag_writers = [_bag_writer(writers, stage, ds, e, wanted is not None) for e in bag_exports]
         for ref, result in loop:
+            latencies.append(result.latency_ms)
+            for w in bag_writers:
+                _write_cloud(w, result)
             prep = result.prep
             ds.write_prediction(
                 stage, ref, prep.scan_labels(result.labels), prep.image, result.semantics
@@ -200,6 +225,7 @@ def run_segment(spec: SegmentRun) -> SegmentSummary:
                 )
         if loop.skipped:
             write_skipped(stage / "skipped.csv", sort_skipped(loop.skipped))
+        writers.close()  # the bags are complete before the stage moves into place
     done = len(refs) - len(loop.skipped)
     return SegmentSummary(
         done,
@@ -210,6 +236,41 @@ def run_segment(spec: SegmentRun) -> SegmentSummary:
         fallbacks,
         sort_skipped(loop.skipped),
         [out / name for name in renders],
+        latency_line(latencies) if ds.format in STREAMS and latencies and sel.jobs == 1 else None,
+        [out / w.path.name for w in bag_writers],
+    )
+
+
+def latency_line(latencies_ms: list[float]) -> str:
+    """The run's latency per revolution (:func:`flic_cli.runs.latency.summary_line`)."""
+    from flic_cli.runs.latency import summary_line
+
+    return summary_line("segment", np.asarray(latencies_ms))
+
+
+def _bag_writer(stack: ExitStack, stage: Path, ds: Any, storage: str, with_label: bool) -> Any:
+    """An open :class:`flic_cli.io.bag_writer.CloudBagWriter` for ``--export mcap|bag``."""
+    from flic_cli.io.bag_writer import CloudBagWriter, export_folder
+
+    path = export_folder(stage, ds.root, storage)
+    return stack.enter_context(CloudBagWriter(path, storage, "/flic/clusters", with_label))
+
+
+def _write_cloud(writer: Any, result: Segmented) -> None:
+    """One frame's PointCloud2 of clusters, with the input's stamp and frame id."""
+    extra = result.extra or {}
+    label = None
+    if writer.with_label and result.semantics is not None:
+        sem = result.semantics
+        keep = result.prep.keep
+        label = sem if keep is None else sem[keep]
+    writer.write(
+        int(extra.get("stamp_ns", 0)),
+        str(extra.get("frame_id", "")),
+        result.prep.points,
+        result.labels,
+        extra.get("intensity"),
+        label,
     )
 
 

@@ -53,13 +53,26 @@ def write_part(
                 writer.writerows(zip(*(rows[c] for c in columns), strict=True))
 
 
-def done_frames(parts: Path) -> set[tuple[str, int]]:
-    """``(sequence, frame)`` of every frame whose parts are complete."""
+def done_frames(parts: Path, kinds: tuple[str, ...] = ()) -> set[tuple[str, int]]:
+    """``(sequence, frame)`` of every frame whose parts are complete.
+
+    Parameters
+    ----------
+    parts : the parts folder.
+    kinds : the record kinds every done frame must have besides :data:`DONE_KIND`; a frame
+        that lacks one (a part deleted by hand) is not done, and its remaining parts are
+        removed, so that ``--resume`` computes it again.
+    """
     done = set()
     for path in parts.glob(f"*/*.{DONE_KIND}.csv"):
         stem = path.name.split(".", 1)[0]
-        if stem.isdigit():
-            done.add((path.parent.name, int(stem)))
+        if stem.isascii() and stem.isdigit():
+            sequence, frame = path.parent.name, int(stem)
+            if all(part_path(parts, sequence, frame, k).is_file() for k in kinds):
+                done.add((sequence, frame))
+            else:
+                for k in (*kinds, DONE_KIND):
+                    part_path(parts, sequence, frame, k).unlink(missing_ok=True)
     return done
 
 
@@ -84,7 +97,8 @@ def read_parts(
     Raises
     ------
     FlicInputError
-        When a part is missing, unreadable or written by a version with other columns.
+        When a part is missing, unreadable, corrupt (not UTF-8, cut short, a line of the wrong
+        length or value type) or written by a version with other columns.
     """
     header = ",".join(columns) + "\n"
     chunks = []
@@ -98,6 +112,10 @@ def read_parts(
                 raise FlicInputError(
                     path, "part file is missing or unreadable (rerun with --resume)"
                 ) from None
+            except UnicodeDecodeError:
+                raise FlicInputError(path, _CORRUPT + "it is not UTF-8 text") from None
+            if not content.endswith("\n"):  # parts end with a line end: this one was cut
+                raise FlicInputError(path, _CORRUPT + "it ends in the middle of a line")
             first, _, body = content.partition("\n")
             if first + "\n" != header:
                 raise FlicInputError(
@@ -106,18 +124,50 @@ def read_parts(
                     "delete the parts folder or use another --out",
                 )
             text.append(body)
-        chunks.append(pd.read_csv(io.StringIO("".join(text)), dtype=dtypes, keep_default_na=False))
+        try:
+            chunk = pd.read_csv(io.StringIO("".join(text)), dtype=dtypes, keep_default_na=False)
+        except (ValueError, pd.errors.ParserError) as exc:  # find the part that breaks it
+            for sequence, frame in keys[start : start + _CHUNK_FRAMES]:
+                _check_part(part_path(parts, sequence, frame, kind), header, dtypes)
+            raise FlicInputError(
+                parts,
+                f"part files of kind {kind} do not parse ({exc}): delete them and rerun with "
+                "--resume",
+            ) from None
+        chunks.append(chunk)
     if not chunks:
         return pd.DataFrame({c: pd.Series(dtype=dtypes.get(c, "float64")) for c in columns})
     return pd.concat(chunks, ignore_index=True)
+
+
+_CORRUPT = "part file is corrupt (delete it and rerun with --resume: its frame is computed again): "
+
+
+def _check_part(path: Path, header: str, dtypes: dict[str, Any]) -> None:
+    """Raise :class:`FlicInputError` naming ``path`` when it does not parse as a part file."""
+    text = path.read_text(encoding="utf-8")
+    n_columns = header.count(",") + 1
+    for lineno, line in enumerate(text.splitlines()[1:], start=2):
+        if line.count(",") + 1 != n_columns:
+            raise FlicInputError(
+                path, _CORRUPT + f"line {lineno} has {line.count(',') + 1} of {n_columns} fields"
+            )
+    try:
+        pd.read_csv(io.StringIO(text), dtype=dtypes, keep_default_na=False)
+    except (ValueError, pd.errors.ParserError) as exc:
+        raise FlicInputError(path, _CORRUPT + str(exc).splitlines()[0]) from None
 
 
 def _differences(old: dict[str, Any], new: dict[str, Any]) -> list[str]:
     return sorted(k for k in set(old) | set(new) if old.get(k) != new.get(k))
 
 
-def open_store(out: Path, params: dict[str, Any], resume: bool) -> set[tuple[str, int]]:
+def open_store(
+    out: Path, params: dict[str, Any], resume: bool, kinds: tuple[str, ...] = ()
+) -> set[tuple[str, int]]:
     """Check ``out`` against an earlier run, write ``run.json``; return the frames already done.
+
+    ``kinds``: the record kinds a done frame must have (see :func:`done_frames`).
 
     Raises
     ------
@@ -133,6 +183,8 @@ def open_store(out: Path, params: dict[str, Any], resume: bool) -> set[tuple[str
         try:
             old = json.loads(run_file.read_text(encoding="utf-8"))
         except (OSError, ValueError):
+            old = None
+        if not isinstance(old, dict):  # JSON, but not a run's parameters ([1], "x", 3)
             old = None
     if has_parts:
         if old is None:
@@ -154,7 +206,7 @@ def open_store(out: Path, params: dict[str, Any], resume: bool) -> set[tuple[str
                 "(finished frames are kept), or use another --out",
             )
         _clean_temporaries(parts)
-        return done_frames(parts)
+        return done_frames(parts, kinds)
     with atomic_write(run_file) as tmp:
         tmp.write_text(json.dumps(params, indent=2, sort_keys=True) + "\n", encoding="utf-8")
     return set()

@@ -21,7 +21,8 @@ from flic_cli.metrics import match_objects, summarize
 from flic_cli.projection import Projection
 from flic_cli.runs.evaluate import select_labelled
 from flic_cli.runs.frames import FrameLoop, Skipped, sort_skipped, write_skipped
-from flic_cli.runs.output import check_output_dir
+from flic_cli.runs.output import check_output_dir, holding_out_lock
+from flic_cli.runs.parallel import check_scheduler
 from flic_cli.runs.pipeline import Segmenter, build_segmenter, prepare
 from flic_cli.runs.scoring import load_labelled_frame
 from flic_cli.runs.spec import SweepRun
@@ -48,8 +49,12 @@ def sweep_values(start: float, stop: float, step: float) -> np.ndarray:
     Raises
     ------
     FlicInputError
-        When ``step <= 0``, ``stop < start``, a value is not positive, or there are too many.
+        When a bound is not finite (nan, inf), ``step <= 0``, ``stop < start``, a value is not
+        positive, or there are too many.
     """
+    for name, value in (("--from", start), ("--to", stop), ("--step", step)):
+        if not np.isfinite(value):
+            raise FlicInputError(None, f"{name} must be a finite number, got {value}")
     if not step > 0:
         raise FlicInputError(None, f"--step must be positive, got {step}")
     if stop < start:
@@ -118,6 +123,7 @@ class SweepResult:
         )
 
 
+@holding_out_lock
 def run_sweep(spec: SweepRun) -> SweepResult:
     """Sweep a method's main parameter and write ``sweep.csv`` and ``sweep.png`` into
     ``spec.out``.
@@ -131,6 +137,7 @@ def run_sweep(spec: SweepRun) -> SweepResult:
     sel = spec.selection
     config = sel.loaded_config()
     setting = sel.setting_or("no-ground")
+    check_scheduler(spec.scheduler)
     method, start, stop, step = spec.method, spec.start, spec.stop, spec.step
     base = build_segmenter(config, method, setting, sel.remover_or("paper"))
     d_start, d_stop, d_step = getattr(base.method, "sweep_range", (None, None, None))
@@ -156,6 +163,13 @@ def run_sweep(spec: SweepRun) -> SweepResult:
     )
     for ref, ious in loop:
         per_frame[(ref.sequence, ref.frame)] = ious
+    if loop.skipped and not per_frame:
+        write_skipped(out / "skipped.csv", sort_skipped(loop.skipped))
+        raise FlicInputError(
+            sel.data,
+            f"every selected frame is bad ({len(loop.skipped)}, listed in "
+            f"{out / 'skipped.csv'}): nothing to sweep",
+        )
 
     ordered = [per_frame[k] for k in ((r.sequence, r.frame) for r in refs) if k in per_frame]
     ious = np.hstack(ordered) if ordered else np.zeros((values.size, 0))

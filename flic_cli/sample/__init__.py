@@ -10,7 +10,9 @@ Modules
   :class:`Scene`, and :func:`custom_scene`, :func:`person`, :func:`car` for targeted scenes;
 - :mod:`~flic_cli.sample.street`: the street generator, :func:`make_scene`;
 - :mod:`~flic_cli.sample.sensor`: the HDL-64E model and the ray caster :func:`cast` (noise,
-  dropouts, the recording car :data:`EGO_VEHICLE`);
+  dropouts, the recording car :data:`EGO_VEHICLE`), and the other sensors' profiles
+  :data:`SENSOR_PROFILES` (``flic sample --sensor``: VLP-16, VLP-32C, HDL-32E, OS1-64, OS1-128,
+  OS2-128 beam tables and columns);
 - :mod:`~flic_cli.sample.render`: :func:`render_kitti` (a scan in scan order with labels) and
   :func:`render_moosmann` (a range image with per-pixel truth);
 - :mod:`~flic_cli.sample.writer`: :func:`write_sample`, :func:`ensure_sample` (both formats, written
@@ -103,6 +105,17 @@ sensor's scan order, so that :func:`flic_cli.projection.project_points` recovers
 as a Moosmann-style log (870 x 64 16-bit PNG range images + ``img.cfg``), into a temporary folder
 renamed into place once complete. :func:`ensure_sample` writes the default sample into
 :func:`default_sample_dir` once and reuses it afterwards.
+
+Other sensors
+-------------
+``write_sample(out, sensor="vlp16")`` (``flic sample OUT --sensor vlp16``) casts the same frames
+with another sensor's beam table and columns (:data:`SENSOR_PROFILES`: ``vlp16``, ``vlp32c``,
+``hdl32e``, ``hdl64e`` (the default), ``os1-64``, ``os1-128``, ``os2-128``; where each table comes
+from is in its :attr:`SensorProfile.source`), as the SemanticKITTI sequence alone, with
+``out/sensor.toml`` beside it: the ``[projection]`` table (rows = beams, width = columns) with
+which ``flic ... --config out/sensor.toml`` reads the sequence, and the Bridge parameters that
+follow the beam gap (:func:`flic_cli.sensor_params.bridge_parameters`) where they differ from the
+defaults. The default profile writes exactly the sample described above.
 """
 
 from __future__ import annotations
@@ -119,11 +132,14 @@ from flic_cli.sample.scene import (
     person,
 )
 from flic_cli.sample.sensor import (
+    DEFAULT_SENSOR,
     EGO_VEHICLE,
     HDL64_PITCH_DEG,
     MAX_RANGE_M,
     MOOSMANN_HEIGHT,
     MOOSMANN_WIDTH,
+    SENSOR_PROFILES,
+    SensorProfile,
     cast,
     kitti_azimuths,
     moosmann_azimuths,
@@ -132,6 +148,7 @@ from flic_cli.sample.street import make_scene
 from flic_cli.sample.writer import SamplePaths, default_sample_dir, ensure_sample, write_sample
 
 __all__ = [
+    "DEFAULT_SENSOR",
     "EGO_VEHICLE",
     "HDL64_PITCH_DEG",
     "MAX_RANGE_M",
@@ -142,8 +159,10 @@ __all__ = [
     "Cylinder",
     "Ground",
     "MoosmannRender",
+    "SENSOR_PROFILES",
     "SamplePaths",
     "Scene",
+    "SensorProfile",
     "car",
     "cast",
     "custom_scene",

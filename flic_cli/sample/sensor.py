@@ -11,16 +11,21 @@ ahead and behind.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from flic_cli.sample.scene import REMISSION, ROAD, SIDEWALK, TERRAIN, Box, Ground, Scene
 
 __all__ = [
+    "DEFAULT_SENSOR",
     "EGO_VEHICLE",
     "HDL64_PITCH_DEG",
     "MAX_RANGE_M",
     "MOOSMANN_HEIGHT",
     "MOOSMANN_WIDTH",
+    "SENSOR_PROFILES",
+    "SensorProfile",
     "cast",
     "cast_full",
     "kitti_azimuths",
@@ -34,6 +39,174 @@ HDL64_PITCH_DEG: np.ndarray = np.concatenate(
     [np.linspace(-1.9367, 8.5, 32), np.linspace(8.87, 24.9992, 32)]
 )
 HDL64_PITCH_DEG.setflags(write=False)
+
+# ---------------------------------------------------------------------------------------------
+# Sensor profiles: other sensors' beam tables and resolutions (``flic sample --sensor NAME``)
+# ---------------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class SensorProfile:
+    """A spinning lidar as the ray caster models it: one beam per image row, one azimuth per
+    column, all beams of a column firing at the column's azimuth from the sensor's origin.
+
+    What is left out, for every profile: the beams' azimuth offsets (Velodyne's ``rot_correction``,
+    Ouster's ``beam_azimuth_angles``: the image is the destaggered one, every beam of a column at
+    the column's azimuth), the beams' origin offsets (Velodyne's focal distance and vertical
+    offsets, Ouster's ``lidar_origin_to_beam_origin_mm``, 1-3 cm), the firing time within a
+    revolution (the street is frozen during a sweep: no rolling shutter), intensity models and
+    second returns. The noise and dropout model of :func:`cast` is the same for every sensor.
+
+    Attributes
+    ----------
+    name : the ``--sensor`` name.
+    title : the sensor, in words.
+    pitch_deg : (H,) beam pitch in degrees, positive = downward, top beam first (sorted).
+    width : columns per revolution at 10 Hz.
+    source : where the beam table and the column count come from.
+    """
+
+    name: str
+    title: str
+    pitch_deg: np.ndarray
+    width: int
+    source: str
+
+    @property
+    def beams(self) -> int:
+        """Number of beams (image rows)."""
+        return int(self.pitch_deg.size)
+
+    @property
+    def vertical_fov_deg(self) -> tuple[float, float]:
+        """(lowest, highest) beam elevation, degrees (positive = up)."""
+        return float(-self.pitch_deg[-1]), float(-self.pitch_deg[0])
+
+    @property
+    def beam_spacing_deg(self) -> np.ndarray:
+        """(H - 1,) elevation step between adjacent rows, degrees."""
+        return np.diff(self.pitch_deg)
+
+    @property
+    def column_step_deg(self) -> float:
+        """Azimuth step between adjacent columns, degrees."""
+        return 360.0 / self.width
+
+
+def _profile(
+    name: str, title: str, elevation_deg: list[float], width: int, source: str
+) -> SensorProfile:
+    """A profile from elevations in degrees (positive = up, any order), sorted top beam first."""
+    pitch = np.sort(-np.asarray(elevation_deg, dtype=np.float64))
+    pitch.setflags(write=False)
+    if np.unique(pitch).size != pitch.size:
+        raise ValueError(f"{name}: two beams at the same elevation")
+    return SensorProfile(name, title, pitch, width, source)
+
+
+#: Velodyne VLP-32C elevations in firing order (laser id 0..31), degrees: the table of the
+#: VLP-32C user manual (also velodyne-decoder's default calibration), -25 .. +15 deg, dense
+#: (1/3 deg) around the horizon, sparse (up to 8 deg) towards the ends.
+_VLP32C_ELEVATION_DEG = [
+    -25.0, -1.0, -1.667, -15.639, -11.31, 0.0, -0.667, -8.843,
+    -7.254, 0.333, -0.333, -6.148, -5.333, 1.333, 0.667, -4.0,
+    -4.667, 1.667, 1.0, -3.667, -3.333, 3.333, 2.333, -2.667,
+    -3.0, 7.0, 4.667, -2.333, -2.0, 15.0, 10.333, -1.333,
+]  # fmt: skip
+
+#: Ouster OS-1-64: ``beam_altitude_angles`` of a real unit (the metadata of ouster-sdk's test
+#: recording ``OS-1-64_1024x10_fw20``, BSD-3-Clause; ``../shared/data/sensors/ouster/``),
+#: +16.46 .. -16.75 deg, gaps alternating about 0.53 and 0.48 deg.
+_OS1_64_ELEVATION_DEG = [
+    16.46, 15.88, 15.32, 14.8, 14.29, 13.71, 13.17, 12.63, 12.15, 11.58, 11.05, 10.52, 10.05,
+    9.49, 8.95, 8.43, 7.95, 7.41, 6.88, 6.34, 5.87, 5.33, 4.8, 4.27, 3.79, 3.26, 2.72, 2.19,
+    1.71, 1.18, 0.65, 0.12, -0.36, -0.9, -1.43, -1.96, -2.44, -2.97, -3.51, -4.04, -4.52, -5.05,
+    -5.58, -6.12, -6.61, -7.13, -7.67, -8.22, -8.7, -9.22, -9.76, -10.3, -10.8, -11.33, -11.86,
+    -12.43, -12.91, -13.45, -14.0, -14.57, -15.07, -15.6, -16.17, -16.75,
+]  # fmt: skip
+
+#: Ouster OS-2-128: ``beam_altitude_angles`` of a real unit (ouster-sdk's test recording
+#: ``OS-2-128-U1_v2.3.0_1024x10``, BSD-3-Clause), +10.76 .. -11.09 deg, gaps 0.14-0.20 deg.
+_OS2_128_ELEVATION_DEG = [
+    10.76, 10.58, 10.42, 10.24, 10.1, 9.93, 9.76, 9.57, 9.41, 9.24, 9.09, 8.91, 8.75, 8.57,
+    8.41, 8.23, 8.08, 7.9, 7.74, 7.55, 7.39, 7.21, 7.03, 6.86, 6.7, 6.53, 6.35, 6.18, 6.02,
+    5.83, 5.67, 5.5, 5.32, 5.14, 4.97, 4.81, 4.63, 4.46, 4.28, 4.11, 3.95, 3.76, 3.58, 3.43,
+    3.24, 3.07, 2.9, 2.72, 2.55, 2.37, 2.21, 2.03, 1.87, 1.69, 1.51, 1.32, 1.16, 0.98, 0.81,
+    0.63, 0.46, 0.29, 0.11, -0.05, -0.25, -0.42, -0.58, -0.76, -0.93, -1.11, -1.28, -1.45,
+    -1.63, -1.81, -1.97, -2.16, -2.32, -2.5, -2.68, -2.85, -3.02, -3.19, -3.37, -3.55, -3.73,
+    -3.9, -4.07, -4.25, -4.4, -4.58, -4.75, -4.94, -5.11, -5.28, -5.46, -5.64, -5.8, -5.96,
+    -6.15, -6.32, -6.49, -6.66, -6.84, -7.0, -7.17, -7.35, -7.51, -7.69, -7.86, -8.04, -8.22,
+    -8.38, -8.55, -8.72, -8.89, -9.06, -9.23, -9.4, -9.57, -9.74, -9.91, -10.07, -10.24,
+    -10.41, -10.58, -10.75, -10.92, -11.09,
+]  # fmt: skip
+
+#: The name of the sample's own sensor (the default of ``flic sample --sensor``).
+DEFAULT_SENSOR = "hdl64e"
+
+#: ``flic sample --sensor NAME``: every profile the sample can cast, by name.
+SENSOR_PROFILES: dict[str, SensorProfile] = {
+    p.name: p
+    for p in (
+        _profile(
+            "vlp16",
+            "Velodyne VLP-16",
+            list(np.arange(-15.0, 15.5, 2.0)),
+            1800,
+            "VLP-16 user manual: 16 beams -15 .. +15 deg every 2 deg; 0.2 deg azimuth "
+            "steps at 10 Hz (1800 columns)",
+        ),
+        _profile(
+            "vlp32c",
+            "Velodyne VLP-32C",
+            _VLP32C_ELEVATION_DEG,
+            1800,
+            "VLP-32C user manual's elevation table (non-uniform, -25 .. +15 deg); 0.2 deg "
+            "azimuth steps at 10 Hz (1800 columns)",
+        ),
+        _profile(
+            "hdl32e",
+            "Velodyne HDL-32E",
+            list(-30.67 + np.arange(32) * 4.0 / 3.0),
+            2170,
+            "HDL-32E user manual: 32 beams -30.67 .. +10.67 deg every 4/3 deg; 694,292 "
+            "points/s / 32 beams / 10 Hz = about 2170 columns",
+        ),
+        SensorProfile(
+            "hdl64e",
+            "Velodyne HDL-64E (the sample's own model)",
+            HDL64_PITCH_DEG,
+            2048,
+            "the sample's HDL-64E model (HDL64_PITCH_DEG: two blocks, linear within each, "
+            "+1.94 .. -25 deg) and KITTI's 2048 columns; an approximation of the real table",
+        ),
+        _profile(
+            "os1-64",
+            "Ouster OS1-64",
+            _OS1_64_ELEVATION_DEG,
+            1024,
+            "beam_altitude_angles of a real OS-1-64 (ouster-sdk test data, "
+            "OS-1-64_1024x10_fw20); lidar_mode 1024x10",
+        ),
+        _profile(
+            "os1-128",
+            "Ouster OS1-128",
+            list(np.linspace(22.5, -22.5, 128)),
+            2048,
+            "approximation: the OS1 datasheet's 45 deg vertical field of view with uniform beam "
+            "spacing (128 beams +22.5 .. -22.5 deg, 0.354 deg apart), no unit's calibration; "
+            "lidar_mode 2048x10",
+        ),
+        _profile(
+            "os2-128",
+            "Ouster OS2-128",
+            _OS2_128_ELEVATION_DEG,
+            1024,
+            "beam_altitude_angles of a real OS-2-128 (ouster-sdk test data, "
+            "OS-2-128-U1_v2.3.0_1024x10); lidar_mode 1024x10",
+        ),
+    )
+}
+
 
 #: No return beyond this range (metres).
 MAX_RANGE_M: float = 120.0

@@ -1,5 +1,12 @@
 """Write the sample: the synthetic street as a SemanticKITTI sequence and a Moosmann-style log.
 
+With another sensor profile (``flic sample --sensor vlp16`` ..., :data:`~flic_cli.sample.sensor.
+SENSOR_PROFILES`) the sample is the SemanticKITTI sequence alone, cast with that sensor's beam
+table and columns, and beside it ``sensor.toml``: the ``[projection]`` table (rows = the sensor's
+beams, width = its columns, ring recovery) with which ``flic ... --config OUT/sensor.toml`` reads
+the sequence. (The Moosmann format is the HDL-64E log of one recording car; it is written for the
+default profile only.)
+
 Every file goes through the writers of :mod:`flic_cli.io`. A sample is written into a temporary
 folder beside its target and renamed into place once complete, so that a failure (bad target, full
 disk, Ctrl-C) leaves either the previous content of the target or the new sample, never a mix or a
@@ -31,14 +38,23 @@ from flic_cli.io import (
 )
 from flic_cli.sample.render import render_kitti
 from flic_cli.sample.sensor import (
+    DEFAULT_SENSOR,
     EGO_VEHICLE,
     HDL64_PITCH_DEG,
     MOOSMANN_HEIGHT,
     MOOSMANN_WIDTH,
+    SENSOR_PROFILES,
+    SensorProfile,
     cast,
     moosmann_azimuths,
 )
 from flic_cli.sample.street import FPS, make_scene
+from flic_cli.sensor_params import (
+    BRIDGE_GAPS_PER_GAMMA,
+    BRIDGE_SWITCH_M,
+    bridge_parameters,
+    street_beam_gap_deg,
+)
 
 __all__ = ["SamplePaths", "default_sample_dir", "ensure_sample", "write_sample"]
 
@@ -79,8 +95,12 @@ _CALIB: dict[str, np.ndarray] = {
 _SAMPLE_FILE = re.compile(
     r"semantickitti/sequences/00/(velodyne/\d{6}\.bin|labels/\d{6}\.label"
     r"|calib\.txt|poses\.txt|times\.txt)|moosmann/(img\.cfg|scan\d{5}\.png)|\.complete"
+    r"|sensor\.toml"
 )
-_SAMPLE_TOP = frozenset({"semantickitti", "moosmann", ".complete"})
+_SAMPLE_TOP = frozenset({"semantickitti", "moosmann", ".complete", "sensor.toml"})
+
+#: The first line of a profile sample's ``sensor.toml`` starts with this (it tells a sample too).
+SENSOR_TOML_MARK = "# flic sample --sensor "
 
 
 @dataclass
@@ -90,15 +110,21 @@ class SamplePaths:
     Attributes
     ----------
     kitti_root : the SemanticKITTI root (``<out>/semantickitti``, holding ``sequences/00``).
-    moosmann_log : the Moosmann-style log folder (``<out>/moosmann``).
+    moosmann_log : the Moosmann-style log folder (``<out>/moosmann``); None for a sensor profile
+        other than the default (no Moosmann log is written).
     seed, frames, kitti_width : the parameters it was written with.
+    sensor : the sensor profile's name (:data:`~flic_cli.sample.sensor.SENSOR_PROFILES`).
+    config : ``<out>/sensor.toml``, the ``--config`` file that reads the sequence (its
+        ``[projection]`` table); None for the default profile, which the default projection reads.
     """
 
     kitti_root: Path
-    moosmann_log: Path
+    moosmann_log: Path | None
     seed: int = 0
     frames: int = 20
     kitti_width: int = 2048
+    sensor: str = DEFAULT_SENSOR
+    config: Path | None = None
     _truth: dict[int, tuple[np.ndarray, np.ndarray]] = field(
         default_factory=dict, repr=False, compare=False
     )
@@ -115,6 +141,8 @@ class SamplePaths:
         -------
         semantic, instance : (64, 870) uint16 arrays, per pixel (0 where there is no return).
         """
+        if self.moosmann_log is None:
+            raise ValueError(f"a {self.sensor} sample has no Moosmann log")
         if frame not in self._truth:
             _, sem, inst = _moosmann_frame(self.seed, frame)
             self._truth[frame] = (sem, inst)
@@ -133,31 +161,79 @@ def _moosmann_frame(seed: int, frame: int) -> tuple[np.ndarray, np.ndarray, np.n
     return cast(scene, HDL64_PITCH_DEG, moosmann_azimuths(), rng, EGO_VEHICLE)
 
 
-def _kitti_frame(seed: int, frame: int, width: int) -> tuple[np.ndarray, np.ndarray]:
+def _kitti_frame(
+    seed: int, frame: int, width: int, pitch_deg: np.ndarray = HDL64_PITCH_DEG
+) -> tuple[np.ndarray, np.ndarray]:
     """Points (N, 4) float32 in scan order and labels (N,) uint32 of a KITTI frame."""
     rng = np.random.default_rng([seed, frame, 1])
-    return render_kitti(make_scene(seed, frame), width=width, noise=True, rng=rng)
+    scene = make_scene(seed, frame)
+    return render_kitti(scene, width=width, pitch_deg=pitch_deg, noise=True, rng=rng)
+
+
+def sensor_toml(profile: SensorProfile, width: int | None = None) -> str:
+    """The ``sensor.toml`` of a profile sample: its ``[projection]`` table, and in comments the
+    sensor, where its beam table comes from, and the beam elevations (degrees, top first).
+
+    Parameters
+    ----------
+    profile : the sensor.
+    width : the columns written (default: the profile's).
+    """
+    width = profile.width if width is None else int(width)
+    elev = ", ".join(f"{-p:.3f}" for p in profile.pitch_deg)
+    lo, hi = profile.vertical_fov_deg
+    text = (
+        f"{SENSOR_TOML_MARK}{profile.name}: synthetic {profile.title} street, "
+        f"{profile.beams} beams x {width} columns, elevation {lo:+.2f} .. {hi:+.2f} deg\n"
+        f"# beam table: {profile.source}\n"
+        f"# beam elevations, degrees, top beam first (= image row 0 first): {elev}\n"
+        "# Read the sequence beside this file with it, e.g.\n"
+        "#   flic evaluate OUT/semantickitti --config OUT/sensor.toml\n"
+        "[projection]\n"
+        'mode = "rings"\n'
+        f"rows = {profile.beams}\n"
+        f"width = {width}\n"
+    )
+    elevation = -np.radians(profile.pitch_deg)
+    bridge = bridge_parameters(elevation)
+    if bridge:
+        gap = street_beam_gap_deg(elevation)
+        text += (
+            "\n# Bridge's link distances from the beam gap (flic_cli.sensor_params."
+            "bridge_parameters):\n"
+            f"# gamma = max(2 deg, {BRIDGE_GAPS_PER_GAMMA:g} x {gap:.3f} deg), threshold = "
+            f"max(0.35 m, {BRIDGE_SWITCH_M:g} m x sin(gamma))\n"
+            "[methods.bridge]\n" + "".join(f"{k} = {v!r}\n" for k, v in bridge.items())
+        )
+    return text
 
 
 def _write_files(
-    folder: Path, frames: int, seed: int, kitti_width: int
+    folder: Path, frames: int, seed: int, kitti_width: int, sensor: str = DEFAULT_SENSOR
 ) -> dict[int, tuple[np.ndarray, np.ndarray]]:
-    """Write the sample's files into ``folder``; the Moosmann ground truth of every frame."""
+    """Write the sample's files into ``folder``; the Moosmann ground truth of every frame (none
+    for a profile other than the default)."""
     seq = folder / "semantickitti" / "sequences" / "00"
     moos = folder / "moosmann"
+    default = sensor == DEFAULT_SENSOR
+    profile = SENSOR_PROFILES[sensor]
     truth: dict[int, tuple[np.ndarray, np.ndarray]] = {}
     poses = []
     for k in range(frames):
-        pts, labels = _kitti_frame(seed, k, kitti_width)
+        pts, labels = _kitti_frame(seed, k, kitti_width, profile.pitch_deg)
         write_bin(seq / "velodyne" / f"{k:06d}.bin", pts)
         write_label(seq / "labels" / f"{k:06d}.label", labels)
-        ranges, sem, inst = _moosmann_frame(seed, k)
-        write_png_range(moos / f"scan{k:05d}.png", ranges)
-        truth[k] = (sem, inst)
+        if default:
+            ranges, sem, inst = _moosmann_frame(seed, k)
+            write_png_range(moos / f"scan{k:05d}.png", ranges)
+            truth[k] = (sem, inst)
         poses.append(make_scene(seed, k).pose)
     write_calib(seq / "calib.txt", _CALIB, float_format=".6e")
     write_poses(seq / "poses.txt", np.stack(poses), float_format=".6e")
     write_times(seq / "times.txt", np.arange(frames) / FPS)
+    if not default:
+        atomic_write_bytes(folder / "sensor.toml", sensor_toml(profile, kitti_width).encode())
+        return truth
     # The horizontal angles are integers so that the file reads "180; -180" as the real ones do.
     cfg = ImgCfg(MOOSMANN_WIDTH, MOOSMANN_HEIGHT, 180, -180, HDL64_PITCH_DEG)
     write_img_cfg(moos / "img.cfg", cfg, comment=IMG_CFG_COMMENT, pitch_format=".4f")
@@ -167,6 +243,15 @@ def _write_files(
 # ---------------------------------------------------------------------------------------------
 # Checks and the temporary folder
 # ---------------------------------------------------------------------------------------------
+
+
+def _check_sensor(sensor: str) -> SensorProfile:
+    """The profile named ``sensor``; a one-line error naming the known ones otherwise."""
+    if sensor not in SENSOR_PROFILES:
+        raise FlicInputError(
+            None, f"--sensor {sensor}: unknown sensor; one of {', '.join(SENSOR_PROFILES)}"
+        )
+    return SENSOR_PROFILES[sensor]
 
 
 def _check_parameters(frames: int, seed: int, kitti_width: int) -> None:
@@ -186,7 +271,13 @@ def _is_sample(folder: Path) -> bool:
         if not top <= _SAMPLE_TOP:
             return False
         cfg = folder / "moosmann" / "img.cfg"
-        if not cfg.read_text(errors="replace").startswith(f"# {IMG_CFG_COMMENT}\n"):
+        toml = folder / "sensor.toml"
+        if cfg.is_file():
+            if not cfg.read_text(errors="replace").startswith(f"# {IMG_CFG_COMMENT}\n"):
+                return False
+        elif not toml.is_file() or not toml.read_text(errors="replace").startswith(
+            SENSOR_TOML_MARK
+        ):
             return False
         return all(
             _SAMPLE_FILE.fullmatch(p.relative_to(folder).as_posix())
@@ -281,7 +372,12 @@ def _commit(tmp: Path, out: Path) -> None:
 
 
 def _write_atomically(
-    out: Path, frames: int, seed: int, kitti_width: int, stamp: str | None = None
+    out: Path,
+    frames: int,
+    seed: int,
+    kitti_width: int,
+    stamp: str | None = None,
+    sensor: str = DEFAULT_SENSOR,
 ) -> tuple[Path, Path | None, dict[int, tuple[np.ndarray, np.ndarray]]]:
     """Write the sample into a temporary folder beside ``out``; nothing is left on failure.
 
@@ -290,7 +386,7 @@ def _write_atomically(
     """
     tmp, created = _temp_beside(out)
     try:
-        truth = _write_files(tmp, frames, seed, kitti_width)
+        truth = _write_files(tmp, frames, seed, kitti_width, sensor)
         if stamp is not None:
             atomic_write_bytes(tmp / ".complete", stamp.encode())
     except OSError as exc:
@@ -310,9 +406,18 @@ def _write_atomically(
 
 
 def write_sample(
-    out: str | Path, frames: int = 20, seed: int = 0, kitti_width: int = 2048
+    out: str | Path,
+    frames: int = 20,
+    seed: int = 0,
+    kitti_width: int | None = None,
+    sensor: str = DEFAULT_SENSOR,
 ) -> SamplePaths:
     """Write the synthetic street as a SemanticKITTI sequence and as a Moosmann-style log.
+
+    With ``sensor`` other than ``"hdl64e"`` the street is cast with that sensor's beams and
+    columns (:data:`~flic_cli.sample.sensor.SENSOR_PROFILES`), as the SemanticKITTI sequence and
+    ``out/sensor.toml`` (the ``[projection]`` table to read it with, see :func:`sensor_toml`); no
+    Moosmann log is written then.
 
     Layout::
 
@@ -331,34 +436,50 @@ def write_sample(
         before (which is replaced).
     frames : number of frames (10 Hz), at least 1.
     seed : street seed, an integer >= 0.
-    kitti_width : rays per ring of the KITTI scans (azimuth resolution 360 deg / width).
+    kitti_width : rays per ring of the KITTI scans (azimuth resolution 360 deg / width);
+        default: the sensor's columns (2048 for the HDL-64E).
+    sensor : the sensor profile's name (``vlp16``, ``vlp32c``, ``hdl32e``, ``hdl64e``,
+        ``os1-64``, ``os1-128``, ``os2-128``).
 
     Returns
     -------
     SamplePaths
-        The two dataset roots; the Moosmann ground truth of the written frames is kept in memory
+        The dataset roots; the Moosmann ground truth of the written frames is kept in memory
         (:meth:`SamplePaths.moosmann_truth`), since the format has no labels.
 
     Raises
     ------
     FlicInputError
-        Before writing anything: ``frames`` < 1, ``seed`` < 0, ``out`` is a file or a folder with
+        Before writing anything: ``frames`` < 1, ``seed`` < 0, an unknown ``sensor``, ``out`` is
+        a file or a folder with
         other content than a sample, or ``out``'s folder cannot be created or written to. While
         writing: when a write fails (e.g. a full disk); nothing is left behind.
     """
     out = Path(out)
+    profile = _check_sensor(sensor)
+    if kitti_width is None:
+        kitti_width = profile.width
     _check_parameters(frames, seed, kitti_width)
     # A link to a folder: the sample goes into the folder, the link stays.
     real = out.resolve() if out.is_symlink() else out
     _check_out(real)
-    tmp, created, truth = _write_atomically(real, frames, seed, kitti_width)
+    tmp, created, truth = _write_atomically(real, frames, seed, kitti_width, sensor=sensor)
     try:
         _commit(tmp, real)
     except OSError as exc:
         _remove(tmp)
         _remove(created)
         raise FlicInputError(out, f"cannot be replaced ({exc.strerror})") from None
-    paths = SamplePaths(out / "semantickitti", out / "moosmann", seed, frames, kitti_width)
+    default = sensor == DEFAULT_SENSOR
+    paths = SamplePaths(
+        out / "semantickitti",
+        out / "moosmann" if default else None,
+        seed,
+        frames,
+        kitti_width,
+        sensor,
+        None if default else out / "sensor.toml",
+    )
     paths._truth.update(truth)
     return paths
 

@@ -1,0 +1,412 @@
+"""Velodyne lidar packets and pcap recordings, decoded by velodyne-decoder.
+
+The decoding works on UDP payloads (``bytes``), so that other containers (ROS bags) reuse it:
+:func:`decode_scans` turns data packets into revolutions (velodyne-decoder's ``StreamDecoder``:
+a scan is one full turn from its first packet), :func:`scan_image` makes one into a range image:
+row ``H - 1 - ring`` (velodyne-decoder's ``ring`` numbers the lasers by elevation, 0 = lowest),
+column = the firing (velodyne-decoder's ``column``) shifted so that column 0 looks backwards.
+The beams' elevation, azimuth offsets and origin offsets come from velodyne-decoder's built-in
+calibration of the model (the model is read from the packets' factory byte; HDL-64E, which has
+none, through velodyne-decoder's own detection and its calibration in the stream).
+
+Supported: every model velodyne-decoder 3 decodes (VLP-16, Puck Hi-Res, VLP-32C, HDL-32E,
+HDL-64E S1/S2/S3, VLS-128, Alpha Prime); tested on the VLP-16 recording of the shared data.
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Iterable, Iterator
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+from numba import njit
+
+from flic_cli.errors import FlicInputError
+from flic_cli.io.base import Frame, FrameRef
+from flic_cli.io.sensor import FileInfo, SensorFileDataset, SensorModel
+from flic_cli.range_image import RangeImage
+
+FORMAT = "velodyne"
+PACKET_SIZE = 1206
+"""Bytes of a Velodyne data packet (12 blocks of 100 bytes, time stamp, factory bytes)."""
+DATA_PORT = 2368
+
+#: Factory byte (the packet's last byte) -> velodyne-decoder model name, beams.
+FACTORY_MODELS: dict[int, tuple[str, int]] = {
+    0x21: ("HDL32E", 32),
+    0x22: ("VLP16", 16),
+    0x23: ("PuckLite", 16),
+    0x24: ("PuckHiRes", 16),
+    0x28: ("VLP32C", 32),
+    0xA1: ("VLS128", 128),
+}
+#: Return mode byte -> name.
+RETURN_MODES = {0x37: "strongest", 0x38: "last", 0x39: "dual"}
+
+
+def _vd():  # noqa: ANN202
+    try:
+        import velodyne_decoder
+    except ImportError:  # pragma: no cover - a core dependency
+        raise FlicInputError(
+            None, "reading Velodyne packets needs velodyne-decoder (pip install velodyne-decoder)"
+        ) from None
+    return velodyne_decoder
+
+
+def is_data_packet(payload: bytes) -> bool:
+    """True for a 1206-byte packet whose blocks start with a Velodyne block flag."""
+    return len(payload) == PACKET_SIZE and payload[:2] in (b"\xff\xee", b"\xff\xdd")
+
+
+@dataclass(frozen=True, eq=False)
+class VelodyneSensor:
+    """The model and calibration a recording was decoded with.
+
+    Attributes
+    ----------
+    model : velodyne-decoder's model name (e.g. ``"VLP16"``).
+    return_mode : ``"strongest"``, ``"last"``, ``"dual"`` or ``"unknown"``.
+    calibration_text : velodyne-decoder calibration (YAML text), None = its built-in one for
+        the model. (Text, so that the object pickles for worker processes.)
+    """
+
+    model: str
+    return_mode: str
+    calibration_text: str | None = None
+
+    @property
+    def config(self):  # noqa: ANN201
+        """A velodyne-decoder ``Config`` for this model and calibration."""
+        vd = _vd()
+        calib = (
+            None
+            if self.calibration_text is None
+            else vd.Calibration.from_string(self.calibration_text)
+        )
+        return vd.Config(model=getattr(vd.Model, self.model), calibration=calib)
+
+    @property
+    def name(self) -> str:
+        """``"Velodyne VLP16"``."""
+        return f"Velodyne {self.model}"
+
+    def calibration(self) -> dict[str, np.ndarray]:
+        """The calibration's per-laser ``vert_correction``, ``rot_correction`` (radians) and
+        ``vert_offset_correction`` (metres), by laser id."""
+        vd = _vd()
+        text = self.calibration_text
+        if text is None:
+            text = vd.Calibration.default_calibs[getattr(vd.Model, self.model)].to_string()
+        out = {}
+        for key in ("vert_correction", "rot_correction", "vert_offset_correction"):
+            out[key] = np.array([float(v) for v in re.findall(rf"^\s*{key}:\s*(\S+)", text, re.M)])
+        return out
+
+    def sensor_model(self, columns: int) -> SensorModel:
+        """Beam angles from velodyne-decoder's calibration, rows sorted top to bottom."""
+        cal = self.calibration()
+        order = np.argsort(cal["vert_correction"])[::-1]  # top beam first
+        offsets = cal["vert_offset_correction"]
+        notes = [f"return mode {self.return_mode}"]
+        if offsets.size:
+            notes.append(
+                "vertical beam origin offsets "
+                f"{1000 * offsets.min():+.1f} .. {1000 * offsets.max():+.1f} mm (calibration)"
+            )
+        return SensorModel(
+            name=self.name,
+            elevation=cal["vert_correction"][order].astype(np.float64),
+            azimuth_offset=cal["rot_correction"][order].astype(np.float64),
+            columns=columns,
+            angles_from="decoder",
+            columns_from="firings in the revolution (velodyne-decoder's column)",
+            notes=tuple(notes),
+        )
+
+
+def detect_sensor(payloads: list[bytes], path: object = None) -> VelodyneSensor:
+    """The model (from the factory byte) and return mode of a recording's data packets.
+
+    ``path`` is a pcap for velodyne-decoder's HDL-64E detection (HDL-64E packets carry no
+    factory byte).
+
+    Raises
+    ------
+    FlicInputError
+        When the model is unknown and cannot be detected.
+    """
+    vd = _vd()
+    first = payloads[0]
+    factory, mode = first[1205], first[1204]
+    ret = RETURN_MODES.get(mode, "unknown")
+    if factory in FACTORY_MODELS:
+        name = FACTORY_MODELS[factory][0]
+        return VelodyneSensor(name, ret)
+    if path is not None:
+        try:
+            model, calib = vd.hdl64e.detect_hdl64e(str(path))
+        except (ValueError, RuntimeError) as exc:
+            raise FlicInputError(path, f"unknown Velodyne model ({exc})") from None
+        if model is not None:
+            return VelodyneSensor(str(model).split(".")[-1], ret, calib.to_string())
+    raise FlicInputError(
+        path, f"unknown Velodyne model (factory byte 0x{factory:02x}); velodyne-decoder cannot tell"
+    )
+
+
+@dataclass(frozen=True, eq=False)
+class VelodyneScan:
+    """One revolution as velodyne-decoder decodes it.
+
+    Attributes
+    ----------
+    stamp : time stamp of the scan (seconds; velodyne-decoder's host time).
+    points : (N,) structured array with fields x, y, z (m), intensity, time, column, ring,
+        return_type.
+    complete : True for a full turn; False for the remainder at the end of a stream.
+    first_packet, last_packet : indices (into the payloads) of the scan's first packet and of the
+        packet whose arrival completed it.
+    """
+
+    stamp: float
+    points: np.ndarray
+    complete: bool
+    first_packet: int
+    last_packet: int
+
+
+def decode_scans(
+    packets: Iterable[tuple[float, bytes]], sensor: VelodyneSensor, remainder: bool = True
+) -> Iterator[VelodyneScan]:
+    """Decode ``(time stamp, payload)`` data packets into revolutions.
+
+    Parameters
+    ----------
+    packets : data packets (1206 bytes; others are skipped) with their capture time stamps.
+    sensor : the model to decode with (:func:`detect_sensor`).
+    remainder : also yield the incomplete scan left at the end (``complete = False``).
+    """
+    vd = _vd()
+    decoder = vd.StreamDecoder(sensor.config)
+    start = 0
+    i = -1
+    for i, (stamp, payload) in enumerate(packets):
+        if len(payload) != PACKET_SIZE:
+            continue
+        result = decoder.decode(float(stamp), payload, True)
+        if result is not None:  # this packet completed the scan: the next one starts after it
+            yield VelodyneScan(_stamp(result[0]), result[1], True, start, i)
+            start = i + 1
+    if remainder:
+        result = decoder.finish(True)
+        if result is not None and len(result[1]):
+            yield VelodyneScan(_stamp(result[0]), result[1], False, start, i)
+
+
+_SCAN_DECODERS: dict[tuple[str, str | None], object] = {}
+
+
+def _scan_decoder(sensor: VelodyneSensor):  # noqa: ANN202
+    """A velodyne-decoder ``ScanDecoder`` for the sensor, made once per process (making one
+    takes 0.2 ms)."""
+    key = (sensor.model, sensor.calibration_text)
+    if key not in _SCAN_DECODERS:
+        _SCAN_DECODERS[key] = _vd().ScanDecoder(sensor.config)
+    return _SCAN_DECODERS[key]
+
+
+def _stamp(pair: object) -> float:
+    return float(getattr(pair, "host", pair))
+
+
+def scan_image(points: np.ndarray, model: SensorModel) -> tuple[RangeImage, np.ndarray]:
+    """The range image of a decoded scan and its points.
+
+    Columns: velodyne-decoder's firing index, rolled so that the first firing lands at the column
+    whose nominal azimuth (+pi at column 0, decreasing) is nearest its own; ``W`` = the firings
+    in this revolution (so no two firings share a column).
+
+    Returns
+    -------
+    image : RangeImage (``projection == "rings"``), one pixel per point, the nearest return of
+        a pixel (dual return mode) giving its range.
+    points : (N, 3) float32 xyz in metres, in the decoder's order (``image.point_pixel[i]`` is
+        the pixel of point ``i``).
+    """
+    if points.dtype.itemsize % 4 == 0 and all(
+        points.dtype.fields[c][1] == 4 * k for k, c in enumerate("xyz")
+    ):  # x, y, z are the first three float32 of each record: one strided copy
+        xyz = np.ascontiguousarray(points.view(np.float32).reshape(len(points), -1)[:, :3])
+    else:
+        xyz = np.stack([points["x"], points["y"], points["z"]], axis=1).astype(np.float32)
+    h = model.elevation.size
+    ranges, counts, pix, z, width = _firing_pixels(xyz, points["column"], points["ring"], h)
+    shape = (h, width)
+    image = RangeImage(
+        ranges.reshape(shape), model.elevation, pix, "rings", counts.reshape(shape),
+        z.reshape(shape), one_point_per_pixel=bool(np.count_nonzero(ranges) == pix.size),
+    )  # fmt: skip
+    return image, xyz
+
+
+@njit(cache=True)
+def _firing_pixels(
+    xyz: np.ndarray, column: np.ndarray, ring: np.ndarray, h: int
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, int]:
+    """:func:`flic_cli.io.rings.ring_image`'s pixels for a decoded scan in one kernel: W = the
+    firings (``column.max() + 1``), the firings rolled so that the first one's mean azimuth
+    lands in its nominal column, row ``h - 1 - ring``; the nearest return of a pixel wins."""
+    n = xyz.shape[0]
+    lo, hi = 1 << 30, -1
+    for i in range(n):
+        c = np.int64(column[i])
+        lo = min(lo, c)
+        hi = max(hi, c)
+    width = hi + 1 if n else 1
+    sx, sy = 0.0, 0.0
+    for i in range(n):
+        if column[i] == lo:
+            sx += xyz[i, 0]
+            sy += xyz[i, 1]
+    shift = 0
+    if n:
+        az0 = np.arctan2(sy, sx)
+        shift = np.int64(np.floor((np.pi - az0) / (2.0 * np.pi) * width)) - lo
+    ranges = np.zeros(h * width, dtype=np.float32)
+    counts = np.zeros(h * width, dtype=np.int32)
+    z = np.zeros(h * width, dtype=np.float32)
+    pix = np.empty(n, dtype=np.int64)
+    for i in range(n):
+        x = np.float64(xyz[i, 0])
+        y = np.float64(xyz[i, 1])
+        zz = np.float64(xyz[i, 2])
+        r = np.float32(np.sqrt(x * x + y * y + zz * zz))
+        c = (np.int64(column[i]) + shift) % width
+        p = (h - 1 - np.int64(ring[i])) * width + c
+        if ranges[p] == 0.0 or r < ranges[p]:
+            ranges[p] = r
+            z[p] = np.float32(zz)
+        counts[p] += 1
+        pix[i] = p
+    return ranges, counts, pix, z, width
+
+
+# ---------------------------------------------------------------------------------------------
+# pcap recordings
+# ---------------------------------------------------------------------------------------------
+
+
+@dataclass
+class _PcapState:
+    index: object  # UdpIndex
+    sensor: VelodyneSensor
+    data: np.ndarray  # indices (into index) of the data packets
+    scans: list[tuple[int, int, int]]  # per complete scan: first, last data packet, points
+
+
+class VelodynePcapDataset(SensorFileDataset):
+    """A Velodyne pcap, or a folder of them (implements :class:`flic_cli.io.base.Dataset`).
+
+    Any pcap without an Ouster metadata JSON beside it is taken for a Velodyne one (so that a
+    capture without lidar packets is reported as such). A frame is one complete revolution as
+    velodyne-decoder cuts them; the remainder at the end of the capture is left out (``flic
+    info`` lists it). A frame's points are velodyne-decoder's returns, in its order.
+    """
+
+    format = FORMAT
+    suffixes = (".pcap", ".pcapng")
+
+    @classmethod
+    def accepts(cls, path: Path) -> bool:
+        """A pcap file that is not an Ouster recording."""
+        from flic_cli.io.ouster import OusterPcapDataset
+        from flic_cli.io.pcap import is_capture
+
+        if not (path.is_file() and path.name.lower().endswith(cls.suffixes)):
+            return False
+        return is_capture(path) and not OusterPcapDataset.accepts(path)
+
+    def _open(self, path: Path) -> FileInfo:
+        from flic_cli.io.pcap import index_udp, iter_payloads, read_payloads
+
+        index = index_udp(path)
+        data = np.flatnonzero(index.size == PACKET_SIZE)
+        first = next(
+            (p for p in read_payloads(index, data[:64]) if is_data_packet(p)), None
+        )  # the model is read from the first data packet
+        if first is None:
+            sizes = sorted(set(index.size.tolist()))[:6]
+            raise FlicInputError(
+                path,
+                f"holds no lidar packets: no Velodyne data packet ({PACKET_SIZE} bytes, port "
+                f"{DATA_PORT}) among its {index.size.size} UDP packets"
+                + (f" (sizes {', '.join(map(str, sizes))} bytes)" if sizes else "")
+                + ", and no Ouster metadata JSON beside it",
+            )
+        sensor = detect_sensor([first], path)
+        kept: list[int] = []
+
+        def packets() -> Iterator[tuple[float, bytes]]:  # data packets, read a chunk at a time
+            stamps = index.time[data].tolist()
+            for k, payload in enumerate(iter_payloads(index, data)):
+                if is_data_packet(payload):
+                    kept.append(k)
+                    yield stamps[k], payload
+
+        scans, partial = [], []
+        for scan in decode_scans(packets(), sensor):  # one scan in memory at once
+            if scan.complete:
+                scans.append((scan.first_packet, scan.last_packet, len(scan.points)))
+            else:
+                partial.append(f"remainder of {len(scan.points):,} points")
+        data = data[np.array(kept, dtype=np.int64)]
+        if not scans:
+            raise FlicInputError(
+                path, f"has no complete revolution ({'; '.join(partial) or 'no points'})"
+            )
+        width = self._first_width(index, data, scans[0], sensor)
+        return FileInfo(
+            path,
+            len(scans),
+            sensor.sensor_model(width),
+            np.array([s[2] for s in scans], dtype=np.int64),
+            partial,
+            _PcapState(index, sensor, data, scans),
+        )
+
+    @staticmethod
+    def _scan(state: _PcapState, k: int, path: Path) -> VelodyneScan:
+        """Revolution ``k``: velodyne-decoder's ``ScanDecoder`` over exactly the packets the
+        stream decoder put into it when the file was opened (the same points, checked by
+        ``test_velodyne_load_equals_one_decoding_pass``), one C++ call."""
+        from flic_cli.io.pcap import read_payloads
+
+        vd = _vd()
+        first, last, n = state.scans[k]
+        which = state.data[first : last + 1]
+        payloads = read_payloads(state.index, which)  # type: ignore[arg-type]
+        stamps = state.index.time[which].tolist()  # type: ignore[attr-defined]
+        packets = vd.PacketVector(
+            [vd.VelodynePacket(t, p) for t, p in zip(stamps, payloads, strict=True)]
+        )
+        stamp, points = _scan_decoder(state.sensor).decode(packets, True)
+        if len(points) != n:
+            raise FlicInputError(path, f"frame {k} decodes differently than when it was opened")
+        return VelodyneScan(_stamp(stamp), points, True, first, last)
+
+    def _first_width(
+        self, index: object, data: np.ndarray, scan: tuple[int, int, int], sensor: VelodyneSensor
+    ) -> int:
+        state = _PcapState(index, sensor, data, [scan])
+        pts = self._scan(state, 0, Path(index.path)).points  # type: ignore[attr-defined]
+        return int(pts["column"].max()) + 1
+
+    def _load(self, info: FileInfo, k: int) -> Frame:
+        state: _PcapState = info.state  # type: ignore[assignment]
+        scan = self._scan(state, k, info.path)
+        image, points = scan_image(scan.points, info.sensor)
+        ref = FrameRef(self.sequence_name(info.path), k, info.path, None, FORMAT, index=k)
+        return Frame(ref, points, None, image)

@@ -1,0 +1,66 @@
+"""Every method on every shared sensor recording through the API: one label per point.
+
+    python scripts/sensors/check_formats.py --out results/sensors/formats_check.csv
+
+For each recording of ../shared/data/sensors (Ouster, Velodyne, PCD, nuScenes) and each method
+variant of the default config: the frame's points as stored, the labels returned (must be one
+per point), clusters, and the seconds the call took (first call per method includes numba's
+cache load; the machine was shared, so these are no benchmark).
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+import flic_cli.api as flic
+
+ROOT = Path(__file__).resolve().parents[2]
+SENSORS = ROOT.parent / "shared" / "data" / "sensors"
+RECORDINGS = [
+    "ouster/OS-2-128-U1_v2.3.0_1024x10.pcap",
+    "ouster/OS-1-64_1024x10_fw20.pcap",
+    "velodyne/vlp16_velodyne_example.pcap",
+    "pcd/robosense_helios16p_1691031766781547066.pcd",
+    "velodyne/nebula_vlp16/1673400472138016708.pcd",
+    "nuscenes/n015-2018-07-24-11-22-45+0800__LIDAR_TOP__1532402927647951.pcd.bin",
+]
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--out", type=Path, default=ROOT / "results/sensors/formats_check.csv")
+    parser.add_argument("--methods", default=None, help="comma-separated; default: all")
+    args = parser.parse_args()
+    methods = args.methods.split(",") if args.methods else flic.methods()
+    rows = []
+    for rec in RECORDINGS:
+        frame = flic.load_frame(SENSORS / rec)
+        for method in methods:
+            start = time.perf_counter()
+            labels = flic.segment_frame(frame, method)
+            seconds = time.perf_counter() - start
+            rows.append(
+                {
+                    "recording": rec,
+                    "format": frame.ref.format,
+                    "image": "x".join(map(str, frame.image.shape)),
+                    "method": method,
+                    "points_stored": frame.n_read,
+                    "labels": labels.shape[0],
+                    "one_label_per_point": labels.shape[0] == frame.n_read,
+                    "clusters": int(np.unique(labels[labels > 0]).size),
+                    "seconds": round(seconds, 3),
+                }
+            )
+            print(rows[-1], flush=True)
+    args.out.parent.mkdir(parents=True, exist_ok=True)
+    pd.DataFrame(rows).to_csv(args.out, index=False)
+
+
+if __name__ == "__main__":
+    main()
