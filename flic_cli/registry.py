@@ -79,10 +79,10 @@ FORMATS: dict[str, Entry] = {
     ),
     "osf": Entry(
         "flic_cli.io.osf:OsfDataset",
-        "an Ouster OSF file, or a folder of them (pip install 'flic[osf]')",
+        "an Ouster OSF file, or a folder of them (needs ouster-sdk, see docs/sensors.md)",
         frames_per_file="many",
         requires="ouster",
-        install="pip install 'flic[osf]'",
+        install="pip install --no-deps ouster-sdk",
     ),
     "pcd": Entry(
         "flic_cli.io.pcd:PcdDataset",

@@ -842,4 +842,4 @@ def test_osf_without_ouster_sdk_names_the_extra(
     d.mkdir()
     (d / "x.osf").write_bytes(b"\0" * 64)
     line = _bad(["segment", d / "x.osf"], capsys, tmp_path / "o", "x.osf")
-    assert "pip install 'flic[osf]'" in line
+    assert "pip install --no-deps ouster-sdk" in line

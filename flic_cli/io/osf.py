@@ -1,11 +1,13 @@
-"""Ouster's OSF recordings, read through ouster-sdk (optional: ``pip install 'flic[osf]'``).
+"""Ouster's OSF recordings, read through ouster-sdk (optional: ``pip install --no-deps
+ouster-sdk``).
 
 OSF is Ouster's own container (a flatbuffers log of compressed lidar frames with the sensor
 metadata inside). flic does not decode it itself: ouster-sdk (>= 1.0) reads the frames, and flic
 takes the first sensor's staggered RANGE field of each complete frame and the metadata (its JSON,
 :meth:`flic_cli.io.ouster.OusterMeta.from_json`), and builds the image and the points exactly as
-for an Ouster pcap (:func:`flic_cli.io.ouster.frame_image`). ouster-sdk's exact pins (see
-docs/sensors.md) are why this is an extra and not a dependency.
+for an Ouster pcap (:func:`flic_cli.io.ouster.frame_image`). ouster-sdk pins
+``rosbags==0.9.23`` against flic's ``rosbags>=0.11``, so it is installed without its
+dependencies (reading OSF needs only numpy of them; see docs/sensors.md).
 """
 
 from __future__ import annotations
@@ -22,7 +24,7 @@ from flic_cli.io.ouster import OusterDataError, OusterFrame, OusterMeta, frame_i
 from flic_cli.io.sensor import FileInfo, SensorFileDataset, SensorModel
 
 FORMAT = "osf"
-INSTALL = "pip install 'flic[osf]'"
+INSTALL = "pip install --no-deps ouster-sdk"
 
 
 def _sdk():  # noqa: ANN202

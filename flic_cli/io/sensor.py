@@ -112,6 +112,9 @@ class SensorFileDataset:
 
     format = ""
     suffixes: tuple[str, ...] = ()
+    #: ``flic segment --semantics`` is for SemanticKITTI scans (its oracle reads ``.label``
+    #: files); the sensor formats' predictions carry cluster ids only.
+    point_semantics = False
 
     def __init__(
         self,
@@ -185,6 +188,11 @@ class SensorFileDataset:
     def refs(self) -> list:
         """Every selected frame, ordered by recording then frame number."""
         return list(self._refs)
+
+    def labelled(self) -> bool:
+        """Whether some selected frame has ground-truth labels (nuScenes with a Panoptic
+        nuScenes ``.npz``; the other sensor formats have none)."""
+        return any(r.label_path is not None for r in self._refs)
 
     def folders(self) -> list[Path]:
         """Where the input lies (outputs must not go inside it): the folder of recordings DATA
