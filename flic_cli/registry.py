@@ -115,6 +115,16 @@ METHODS: dict[str, Entry] = {
         "flic_cli.methods.bridge:Bridge",
         "flic's hole-bridging clusterer: links to the nearest linkable measurement",
     ),
+    "euclidean": Entry(
+        "flic_cli.methods.euclidean:Euclidean", "PCL's Euclidean cluster extraction (3D points)"
+    ),
+    "hdbscan": Entry("flic_cli.methods.hdbscan:Hdbscan", "scikit-learn's HDBSCAN (3D points)"),
+    "slr": Entry("flic_cli.methods.slr:Slr", "scan-line run, Zermas et al. 2017 (range image)"),
+    "cvc": Entry("flic_cli.methods.cvc:Cvc", "curved-voxel clustering, Park et al. 2019"),
+    "alpine": Entry(
+        "flic_cli.methods.alpine:Alpine",
+        "ALPINE, Sautier et al. 2025: per-class bird's-eye kNN graph (needs semantics)",
+    ),
 }
 
 #: Ground removers (``[ground.NAME]`` tables, ``--ground-remover NAME``).
