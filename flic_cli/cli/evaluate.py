@@ -152,8 +152,9 @@ def evaluate(
 
     try:
         sel = Selection(
-            _data_or_sample(data), seqs, frm, setting, ground_remover, cfg, jobs, skip_bad
-        )
+            _data_or_sample(data), seqs, frm, setting=setting, ground_remover=ground_remover,
+            config=cfg, jobs=jobs, skip_bad=skip_bad,
+        )  # fmt: skip
         result = run_evaluate(
             EvaluateRun(
                 sel,
@@ -238,8 +239,9 @@ def sweep_threshold(
     seqs, frm = _selection(sequences, frames)
     try:
         sel = Selection(
-            _data_or_sample(data), seqs, frm, setting, ground_remover, cfg, jobs, skip_bad
-        )
+            _data_or_sample(data), seqs, frm, setting=setting, ground_remover=ground_remover,
+            config=cfg, jobs=jobs, skip_bad=skip_bad,
+        )  # fmt: skip
         result = run_sweep(
             SweepRun(
                 sel,
