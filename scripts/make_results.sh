@@ -5,9 +5,10 @@
 #     . .venv/bin/activate && bash scripts/make_results.sh [step ...]
 # Steps, in this order (default: all of them):
 #     bench repeats evaluate ground synthetic ground-sweep ground-speed sweeps bridge-grid
-#     coverage dbscan pictures profile sensors sensors-synthetic bags cpp panoptic ouster-sdk
+#     coverage dbscan pictures profile sensors sensors-synthetic bags peers cpp panoptic
+#     ouster-sdk peers-fidelity
 # The benchmarks come first, on a quiet machine: evaluate and ground take their times from them.
-# Three steps need something outside the repository; without it they say so and are skipped:
+# Four steps need something outside the repository; without it they say so and are skipped:
 #     cpp       Bogoslavskyi & Stachniss' own C++: DC=<a PRBonn/depth_clustering checkout>, and
 #               the system packages that scripts/depth_clustering/time_cpp.sh names;
 #               also remakes results/ground/bogoslavskyi_fidelity*.csv (their ground masks)
@@ -15,6 +16,8 @@
 #               in a Python with numpy and pyyaml
 #     ouster-sdk  flic's Ouster decoding against ouster-sdk's: OUSTER_PY=<a Python with
 #               ouster-sdk installed, outside the project's environment>
+#     peers-fidelity  the field's clusterers against their reference code: FLIC_REF=<the folder
+#               where scripts/peers_fidelity.sh built valeoai/Alpine, CVC, SLR and PCL's Euclidean>
 # ground-sweep and bridge-grid are the longest steps (many evaluations of the 50 frames each).
 # JOBS sets the processes of evaluate and sweep-threshold.
 set -euo pipefail
@@ -28,8 +31,8 @@ METHODS=bogoslavskyi,flic0,flic1,flic6,flic14,flic1n,flic6n,flic14n,bridge,dbsca
 PEERS=flic0-scipy,flic14-scipy
 GROUND_METHODS=flic0,flic1,flic6,flic14,flic1n,flic6n,flic14n,bridge,dbscan-fast
 DEFAULT="bench repeats evaluate ground synthetic ground-sweep ground-speed sweeps bridge-grid"
-DEFAULT="$DEFAULT coverage dbscan pictures profile sensors sensors-synthetic bags cpp panoptic"
-DEFAULT="$DEFAULT ouster-sdk"
+DEFAULT="$DEFAULT coverage dbscan pictures profile sensors sensors-synthetic bags peers cpp"
+DEFAULT="$DEFAULT panoptic ouster-sdk peers-fidelity"
 SENSORS=../shared/data/sensors
 STEPS=${*:-$DEFAULT}
 mkdir -p "$TMP"
@@ -286,6 +289,34 @@ from bagtools import cycled_vlp16_bag; cycled_vlp16_bag(Path('../shared/data'), 
       continue
     fi
     python scripts/sensors/ouster_sdk_comparison.py --sdk-python "$OUSTER_PY"
+    ;;
+  peers)
+    # the field's clusterers (SLR, CVC, ALPINE, HDBSCAN, Euclidean): docs/peers.md
+    ev=results/peers/evaluate
+    for name in main more hdbscan; do fresh "$ev/$name"; done
+    flic evaluate "$DATA" --setting no-ground --semantics oracle --jobs "$JOBS" \
+      --methods bogoslavskyi,flic0,flic1,flic6,flic14,flic1n,flic6n,flic14n,bridge,dbscan,slr,cvc,alpine,alpine-k32 \
+      --out "$ev/main"
+    flic evaluate "$DATA" --setting no-ground --semantics oracle --jobs "$JOBS" \
+      --methods euclidean,alpine-agnostic --out "$ev/more"
+    flic evaluate "$DATA" --frames 0:1 --setting no-ground --semantics oracle \
+      --methods hdbscan,bridge,dbscan,flic0,euclidean --out "$ev/hdbscan"
+    rm -rf "$ev"/*/parts
+    python scripts/peers_which_clusterer.py results/peers/which_clusterer "$ev/main" "$ev/more" \
+      "$ev/hdbscan"
+    # their sweeps: results/peers/sweeps/README.md
+    sample "$TMP/sample-seed0" 20 0
+    bash scripts/peers_sweeps.sh "$DATA" "$TMP/sample-seed0/semantickitti"
+    bash scripts/peers_sweeps_small.sh "$DATA" "$TMP/sample-seed0/semantickitti"
+    ;;
+  peers-fidelity)
+    if [ -z "${FLIC_REF:-}" ]; then
+      echo "step peers-fidelity skipped: set FLIC_REF to the references built by scripts/peers_fidelity.sh" >&2
+      continue
+    fi
+    python scripts/peers_fidelity.py "$DATA" results/peers/fidelity
+    python scripts/peers_ref_diff.py "$DATA" > results/peers/fidelity/ref_diff.txt
+    python scripts/peers_euclidean_fidelity.py "$DATA" results/peers/fidelity
     ;;
   cpp)
     # their C++ against flic, alternating in one session, on both logs; their ground masks
