@@ -29,8 +29,9 @@ class Entry:
     ----------
     target : ``"package.module:Class"``.
     summary : one line for ``--help``.
-    labelled : (dataset formats) whether the format can carry ground-truth labels (``flic
-        evaluate`` and ``sweep-threshold`` accept only such formats).
+    labelled : (dataset formats) whether the format can carry ground-truth labels (the help of
+        ``flic evaluate`` and ``sweep-threshold`` lists only such formats; the runs check each
+        frame's labels through :meth:`flic_cli.io.base.Dataset.load`).
     frames_per_file : (dataset formats) ``"one"`` (a file per frame: SemanticKITTI ``.bin``,
         Moosmann ``.png``) or ``"many"`` (one file holds many frames, as a pcap or a bag: its
         :class:`flic_cli.io.base.FrameRef` carry the frame's ``index`` in the file).
@@ -113,6 +114,16 @@ METHODS: dict[str, Entry] = {
     "bridge": Entry(
         "flic_cli.methods.bridge:Bridge",
         "flic's hole-bridging clusterer: links to the nearest linkable measurement",
+    ),
+    "euclidean": Entry(
+        "flic_cli.methods.euclidean:Euclidean", "PCL's Euclidean cluster extraction (3D points)"
+    ),
+    "hdbscan": Entry("flic_cli.methods.hdbscan:Hdbscan", "scikit-learn's HDBSCAN (3D points)"),
+    "slr": Entry("flic_cli.methods.slr:Slr", "scan-line run, Zermas et al. 2017 (range image)"),
+    "cvc": Entry("flic_cli.methods.cvc:Cvc", "curved-voxel clustering, Park et al. 2019"),
+    "alpine": Entry(
+        "flic_cli.methods.alpine:Alpine",
+        "ALPINE, Sautier et al. 2025: per-class bird's-eye kNN graph (needs semantics)",
     ),
 }
 

@@ -164,11 +164,46 @@ def _in_file(finite: np.ndarray | None, keep: np.ndarray | None) -> np.ndarray |
     return out
 
 
-def cluster_ground(method: Any, points: np.ndarray, ground: Ground) -> np.ndarray:
+def needs_semantics(method: Any) -> bool:
+    """Whether ``method`` clusters per semantic class (declares ``needs_semantics``, e.g.
+    :class:`flic_cli.methods.alpine.Alpine`): it then takes ``semantics=`` in ``segment``."""
+    return bool(getattr(method, "needs_semantics", False))
+
+
+def segment_with(
+    method: Any,
+    image: RangeImage,
+    points: np.ndarray,
+    ground: Ground | None,
+    semantics: np.ndarray | None = None,
+) -> np.ndarray:
+    """``method.segment(image, points, ground)``, with ``semantics`` ((N,) raw class of every
+    point of ``points``) handed over only to a method that needs them (:func:`needs_semantics`)."""
+    if needs_semantics(method):
+        return method.segment(image, points, ground, semantics=semantics)
+    return method.segment(image, points, ground)
+
+
+def prepared_semantics(prep: Prepared, semantics: np.ndarray | None = None) -> np.ndarray | None:
+    """(N,) raw class of every evaluated point: ``semantics`` ((N_scan,), as
+    :func:`scan_semantics` gives them) at the evaluated points, or the ground truth's classes
+    (``prep.labels``) when None; None without labels."""
+    if semantics is not None:
+        return semantics if prep.keep is None else semantics[prep.keep]
+    if prep.labels is None:
+        return None
+    from flic_cli.semantics import oracle_semantics
+
+    return oracle_semantics(prep.labels)
+
+
+def cluster_ground(
+    method: Any, points: np.ndarray, ground: Ground, semantics: np.ndarray | None = None
+) -> np.ndarray:
     """``method``'s per-point labels after a ground step (``remover.extract``): on the image it
     leaves, without its ground and held cells (whose points take the cluster of the cell
     standing on them, ``ground.attached``)."""
-    return method.segment(ground.image, points, ground)
+    return segment_with(method, ground.image, points, ground, semantics)
 
 
 @dataclass(frozen=True)
@@ -198,20 +233,31 @@ class Segmenter:
         remover."""
         return None if self.remover is None else self.remover.extract(image, points)
 
-    def cluster(self, image: RangeImage, points: np.ndarray, ground: Ground | None) -> np.ndarray:
-        """The method's per-point labels given the ground step's result (or None)."""
+    def cluster(
+        self,
+        image: RangeImage,
+        points: np.ndarray,
+        ground: Ground | None,
+        semantics: np.ndarray | None = None,
+    ) -> np.ndarray:
+        """The method's per-point labels given the ground step's result (or None);
+        ``semantics``: (N,) raw class per point, for a method that needs them."""
         if ground is None:
-            return self.method.segment(image, points, None)
-        return cluster_ground(self.method, points, ground)
+            return segment_with(self.method, image, points, None, semantics)
+        return cluster_ground(self.method, points, ground, semantics)
 
-    def run(self, image: RangeImage, points: np.ndarray) -> tuple[np.ndarray, Ground | None]:
+    def run(
+        self, image: RangeImage, points: np.ndarray, semantics: np.ndarray | None = None
+    ) -> tuple[np.ndarray, Ground | None]:
         """Per-point labels (0 = none or ground) and the ground step's result (or None)."""
         ground = self.ground_step(image, points)
-        return self.cluster(image, points, ground), ground
+        return self.cluster(image, points, ground, semantics), ground
 
-    def __call__(self, image: RangeImage, points: np.ndarray) -> tuple[np.ndarray, Any]:
+    def __call__(
+        self, image: RangeImage, points: np.ndarray, semantics: np.ndarray | None = None
+    ) -> tuple[np.ndarray, Any]:
         """Per-point labels (0 = none or ground) and the ground mask used (or None)."""
-        labels, ground = self.run(image, points)
+        labels, ground = self.run(image, points, semantics)
         return labels, None if ground is None else ground.mask
 
     def with_param(self, value: float) -> Segmenter:

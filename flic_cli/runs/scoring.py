@@ -21,6 +21,7 @@ from flic_cli.errors import FlicInputError
 from flic_cli.ground.base import Ground
 from flic_cli.io.base import Dataset, Frame, FrameRef
 from flic_cli.metrics import distance_band, score_frame
+from flic_cli.metrics.entropy import object_ids, segmentation_entropy
 from flic_cli.metrics.ground import ground_counts
 from flic_cli.metrics.panoptic import agnostic_panoptic_counts
 from flic_cli.projection import Projection
@@ -29,7 +30,9 @@ from flic_cli.runs.pipeline import (
     Segmenter,
     prepare,
     prepare_semantic,
+    prepared_semantics,
     scan_semantics,
+    segment_with,
 )
 
 #: Columns of the per-object records (``per_object.csv``).
@@ -66,6 +69,8 @@ FRAME_COLUMNS: tuple[str, ...] = (
     "pq_fp",
     "pq_fn",
     "pq_iou_sum",
+    "ose",
+    "use",
 )
 
 #: Columns of the per-frame ground-extraction records (ground setting, one row per remover).
@@ -164,10 +169,11 @@ class ScoreJob:
         for setting, segmenters in self.segmenters:
             prep = prepare(frame, setting, self.projection)
             grounds = GroundCache(prep)
+            classes = prepared_semantics(prep)  # the ground truth's, for methods that need them
             for seg in segmenters:
                 ground, ground_seconds = grounds.get(seg)
                 start = time.perf_counter()
-                labels = seg.cluster(prep.image, prep.points, ground)
+                labels = seg.cluster(prep.image, prep.points, ground, classes)
                 seconds = time.perf_counter() - start + ground_seconds
                 add_scores(out, seg.name, setting, prep, labels, seconds, ground_seconds)
             grounds.add_records(out)
@@ -194,7 +200,9 @@ def oracle_panoptic(
     prep = prepare_semantic(frame, semantics, projection)
     rows: dict[str, list] = {c: [] for c in PANOPTIC_COLUMNS}
     for seg in segmenters:
-        labels = seg.method.segment(prep.image, prep.points, None)
+        labels = segment_with(
+            seg.method, prep.image, prep.points, None, prepared_semantics(prep, semantics)
+        )
         counts = panoptic_counts(gt, combine(semantics, prep.scan_labels(labels)))
         n = len(counts)
         rows["method"] += [seg.name] * n
@@ -255,6 +263,7 @@ def add_scores(
     assert prep.labels is not None  # load_labelled_frame guarantees labels
     matches, stats = score_frame(prep.labels, labels, prep.points)
     pq = agnostic_panoptic_counts(prep.labels, labels)
+    ose, use = segmentation_entropy(object_ids(prep.labels), labels)
     n = len(matches)
     obj = out.objects
     obj["method"] += [method] * n
@@ -286,5 +295,7 @@ def add_scores(
         ("pq_fp", int(pq.fp[0])),
         ("pq_fn", int(pq.fn[0])),
         ("pq_iou_sum", float(pq.iou_sum[0])),
+        ("ose", round(ose, 6)),
+        ("use", round(use, 6)),
     ):
         out.frames[key].append(value)

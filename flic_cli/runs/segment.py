@@ -40,7 +40,9 @@ from flic_cli.runs.pipeline import (
     build_segmenter,
     prepare,
     prepare_semantic,
+    prepared_semantics,
     scan_semantics,
+    segment_with,
 )
 from flic_cli.runs.spec import SegmentRun
 
@@ -110,7 +112,10 @@ class SegmentJob:
             return Segmented(prep, labels, ground, extra=extra, latency_ms=ms)
         semantics = scan_semantics(frame, self.semantics)
         prep = prepare_semantic(frame, semantics, self.projection)
-        labels = self.segmenter.method.segment(prep.image, prep.points, None)
+        labels = segment_with(
+            self.segmenter.method, prep.image, prep.points, None,
+            prepared_semantics(prep, semantics),
+        )  # fmt: skip
         ms = (time.perf_counter() - start) * 1e3
         return Segmented(prep, labels, None, semantics, extra=extra, latency_ms=ms)
 

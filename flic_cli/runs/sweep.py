@@ -23,7 +23,7 @@ from flic_cli.runs.evaluate import select_labelled
 from flic_cli.runs.frames import FrameLoop, Skipped, sort_skipped, write_skipped
 from flic_cli.runs.output import check_output_dir, holding_out_lock
 from flic_cli.runs.parallel import check_scheduler
-from flic_cli.runs.pipeline import Segmenter, build_segmenter, prepare
+from flic_cli.runs.pipeline import Segmenter, build_segmenter, prepare, prepared_semantics
 from flic_cli.runs.scoring import load_labelled_frame
 from flic_cli.runs.spec import SweepRun
 from flic_cli.runs.tables import percent
@@ -82,8 +82,9 @@ class SweepJob:
     def __call__(self, ref: FrameRef) -> np.ndarray:
         prep = prepare(load_labelled_frame(self.dataset, ref), self.setting, self.projection)
         ground = self.segmenters[0].ground_step(prep.image, prep.points)
+        classes = prepared_semantics(prep)  # the ground truth's, for methods that need them
         rows = [
-            match_objects(prep.labels, s.cluster(prep.image, prep.points, ground)).iou
+            match_objects(prep.labels, s.cluster(prep.image, prep.points, ground, classes)).iou
             for s in self.segmenters
         ]
         return np.vstack(rows) if rows else np.zeros((0, 0))

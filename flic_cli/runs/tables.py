@@ -55,7 +55,23 @@ TABLE_COLUMNS: tuple[str, ...] = (
     "iou_mu_ground_high",
     "p_mu_low",
     "p_mu_high",
+    "ose",
+    "ose_low",
+    "ose_high",
+    "use",
+    "use_low",
+    "use_high",
+    "pq_oracle",
+    "pq_oracle_low",
+    "pq_oracle_high",
+    "pq_things_oracle",
+    "pq_things_oracle_low",
+    "pq_things_oracle_high",
 )
+
+#: Resamples and seed of the oracle PQ's percentile bootstrap over frames (:func:`add_oracle_pq`).
+PQ_RESAMPLES = 1999
+PQ_SEED = 0
 
 #: Columns of ``panoptic.csv``.
 PANOPTIC_TABLE_COLUMNS: tuple[str, ...] = (
@@ -139,6 +155,8 @@ def frame_dtypes(methods: list[str], settings: tuple[str, ...], seqs: list[str])
         "pq_fp": "int64",
         "pq_fn": "int64",
         "pq_iou_sum": "float64",
+        "ose": "float64",
+        "use": "float64",
     }
 
 
@@ -318,6 +336,76 @@ def paper_table(
     return pd.DataFrame(rows, columns=list(TABLE_COLUMNS))
 
 
+def add_entropy(table: pd.DataFrame, frames: pd.DataFrame) -> pd.DataFrame:
+    """``table`` with OSE and USE (:mod:`flic_cli.metrics.entropy`) of each method's P setting:
+    the mean over frames (not percent) and its 95% bootstrap interval (frames resampled)."""
+    from flic_cli.metrics.intervals import ratio_interval
+
+    table = table.copy()
+    for col in ("ose", "use"):
+        values: dict[str, list[float]] = {col: [], f"{col}_low": [], f"{col}_high": []}
+        for _, row in table.iterrows():
+            sel = frames[
+                (frames["method"] == row["method"]) & (frames["setting"] == row["p_setting"])
+            ]
+            if col not in sel or sel.empty:
+                ci = Interval(float("nan"), float("nan"), float("nan"), 0)
+            else:
+                x = sel[col].to_numpy(dtype=np.float64)
+                ci = ratio_interval(x, np.ones_like(x))
+            values[col].append(round(ci.estimate, 4))
+            values[f"{col}_low"].append(round(ci.low, 4))
+            values[f"{col}_high"].append(round(ci.high, 4))
+        for key, vals in values.items():
+            table[key] = vals
+    return table
+
+
+def add_oracle_pq(
+    table: pd.DataFrame, oracle: pd.DataFrame | None, methods: list[str]
+) -> pd.DataFrame:
+    """``table`` with each method's PQ with oracle semantics (``--semantics oracle``; NaN
+    without): the mean over the 19 classes (``pq_oracle``, semantic-kitti-api's PQ) and over the
+    8 thing classes (``pq_things_oracle``), in percent, with 95% percentile bootstrap intervals
+    (frames resampled, :data:`PQ_RESAMPLES` resamples, seed :data:`PQ_SEED`)."""
+    from flic_cli.classes import LEARNING_NAMES, LEARNING_STUFF, LEARNING_THINGS
+    from flic_cli.metrics.panoptic import pq_sq_rq
+
+    table = table.copy()
+    cols = {c: [float("nan")] * len(table) for c in TABLE_COLUMNS[-6:]}
+    n_cls = len(LEARNING_NAMES)
+    evaluated = list(LEARNING_THINGS) + list(LEARNING_STUFF)
+    rng = np.random.default_rng(PQ_SEED)
+    for i, name in enumerate(table["method"]):
+        g = None if oracle is None else oracle[oracle["method"] == name]
+        if g is None or g.empty:
+            continue
+        key = g["sequence"].astype(str) + "/" + g["frame"].astype(str)
+        frames_, f_idx = np.unique(key.to_numpy(), return_inverse=True)
+        arrays = {}
+        for f in ("tp", "fp", "fn", "iou_sum"):
+            a = np.zeros((frames_.size, n_cls))
+            np.add.at(a, (f_idx, g["class"].to_numpy()), g[f].to_numpy(dtype=np.float64))
+            arrays[f] = a
+        draws = rng.integers(0, frames_.size, size=(PQ_RESAMPLES, frames_.size))
+
+        def means(sums: dict[str, np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
+            pq = pq_sq_rq(sums["tp"], sums["fp"], sums["fn"], sums["iou_sum"])[0]
+            return pq[..., evaluated].mean(axis=-1), pq[..., list(LEARNING_THINGS)].mean(axis=-1)
+
+        full = means({f: a.sum(axis=0) for f, a in arrays.items()})
+        boot = means({f: a[draws].sum(axis=1) for f, a in arrays.items()})
+        pairs = (("pq_oracle", full[0], boot[0]), ("pq_things_oracle", full[1], boot[1]))
+        for col, est, dist in pairs:
+            cols[col][i] = percent(float(est))
+            if frames_.size > 1:
+                cols[f"{col}_low"][i] = percent(float(np.percentile(dist, 2.5)))
+                cols[f"{col}_high"][i] = percent(float(np.percentile(dist, 97.5)))
+    for col, vals in cols.items():
+        table[col] = vals
+    return table
+
+
 def shown_table(table: pd.DataFrame) -> str:
     """``table.csv`` as printed: each IoU_mu and P_mu with its interval in brackets."""
     shown = pd.DataFrame({"method": table["method"]})
@@ -329,6 +417,26 @@ def shown_table(table: pd.DataFrame) -> str:
         ]
     for col in ("p_0.50", "p_0.75", "p_0.95"):
         shown[col] = ["-" if pd.isna(v) else f"{v:.2f}" for v in table[col]]
+    for col, label in (("pq_oracle", "PQ_oracle"), ("pq_things_oracle", "PQ_th_oracle")):
+        if col in table and table[col].notna().any():
+            shown[label] = [
+                "-"
+                if pd.isna(v)
+                else f"{v:.2f}" + ("" if pd.isna(lo) else f" [{lo:.1f}, {hi:.1f}]")
+                for v, lo, hi in zip(
+                    table[col], table[f"{col}_low"], table[f"{col}_high"], strict=True
+                )
+            ]
+    for col in ("ose", "use"):
+        if col in table:
+            shown[col.upper()] = [
+                "-"
+                if pd.isna(v)
+                else f"{v:.2f}" + ("" if pd.isna(lo) else f" [{lo:.1f}, {hi:.1f}]")
+                for v, lo, hi in zip(
+                    table[col], table[f"{col}_low"], table[f"{col}_high"], strict=True
+                )
+            ]
     shown["objects"] = table["objects"]
     return shown.to_string(index=False)
 
@@ -480,6 +588,7 @@ def all_tables(
     """Every table of ``flic evaluate`` by file name (``table.csv`` last)."""
     per_setting = grouped(objects, ["method", "setting"], frames)
     table = paper_table(per_setting, methods, settings, intervals(objects))
+    table = add_oracle_pq(add_entropy(table, frames), oracle, methods)
     return {
         "per_object.csv": objects,
         "per_frame.csv": frames,
