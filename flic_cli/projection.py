@@ -22,7 +22,7 @@ from flic_cli.range_image import RangeImage
 
 @dataclass(frozen=True, config=STRICT)
 class Projection:
-    """How a scan becomes a range image (SPEC section 2).
+    """How a scan becomes a range image (docs/decisions.md).
 
     Attributes
     ----------

@@ -29,8 +29,9 @@ class Entry:
     ----------
     target : ``"package.module:Class"``.
     summary : one line for ``--help``.
-    labelled : (dataset formats) whether the format can carry ground-truth labels (``flic
-        evaluate`` and ``sweep-threshold`` accept only such formats).
+    labelled : (dataset formats) whether the format can carry ground-truth labels (the help of
+        ``flic evaluate`` and ``sweep-threshold`` lists only such formats; the runs check each
+        frame's labels through :meth:`flic_cli.io.base.Dataset.load`).
     frames_per_file : (dataset formats) ``"one"`` (a file per frame: SemanticKITTI ``.bin``,
         Moosmann ``.png``) or ``"many"`` (one file holds many frames, as a pcap or a bag: its
         :class:`flic_cli.io.base.FrameRef` carry the frame's ``index`` in the file).

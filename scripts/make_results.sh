@@ -5,14 +5,19 @@
 #     . .venv/bin/activate && bash scripts/make_results.sh [step ...]
 # Steps, in this order (default: all of them):
 #     bench repeats evaluate ground synthetic ground-sweep ground-speed sweeps bridge-grid
-#     coverage dbscan pictures profile cpp panoptic
+#     coverage dbscan pictures profile sensors sensors-synthetic bags peers cpp panoptic
+#     ouster-sdk peers-fidelity
 # The benchmarks come first, on a quiet machine: evaluate and ground take their times from them.
-# Two steps need something outside the repository; without it they say so and are skipped:
+# Four steps need something outside the repository; without it they say so and are skipped:
 #     cpp       Bogoslavskyi & Stachniss' own C++: DC=<a PRBonn/depth_clustering checkout>, and
 #               the system packages that scripts/depth_clustering/time_cpp.sh names;
 #               also remakes results/ground/bogoslavskyi_fidelity*.csv (their ground masks)
 #     panoptic  semantic-kitti-api's own scores: SKAPI=<a PRBonn/semantic-kitti-api checkout>,
 #               in a Python with numpy and pyyaml
+#     ouster-sdk  flic's Ouster decoding against ouster-sdk's: OUSTER_PY=<a Python with
+#               ouster-sdk installed, outside the project's environment>
+#     peers-fidelity  the field's clusterers against their reference code: FLIC_REF=<the folder
+#               where scripts/peers_fidelity.sh built valeoai/Alpine, CVC, SLR and PCL's Euclidean>
 # ground-sweep and bridge-grid are the longest steps (many evaluations of the 50 frames each).
 # JOBS sets the processes of evaluate and sweep-threshold.
 set -euo pipefail
@@ -26,7 +31,9 @@ METHODS=bogoslavskyi,flic0,flic1,flic6,flic14,flic1n,flic6n,flic14n,bridge,dbsca
 PEERS=flic0-scipy,flic14-scipy
 GROUND_METHODS=flic0,flic1,flic6,flic14,flic1n,flic6n,flic14n,bridge,dbscan-fast
 DEFAULT="bench repeats evaluate ground synthetic ground-sweep ground-speed sweeps bridge-grid"
-DEFAULT="$DEFAULT coverage dbscan pictures profile cpp panoptic"
+DEFAULT="$DEFAULT coverage dbscan pictures profile sensors sensors-synthetic bags peers cpp"
+DEFAULT="$DEFAULT panoptic ouster-sdk peers-fidelity"
+SENSORS=../shared/data/sensors
 STEPS=${*:-$DEFAULT}
 mkdir -p "$TMP"
 
@@ -202,6 +209,114 @@ for step in $STEPS; do
       python scripts/profile_stages.py "$DATA" --method "$m" --setting ground \
         --ground-remover paper --repeat 3 > "results/profile/$m.txt"
     done
+    ;;
+  sensors)
+    # the shared sensor recordings: results/sensors/README.md
+    python scripts/sensors/check_formats.py --out results/sensors/formats_check.csv
+    python scripts/sensors/read_timing.py --repeat 200 --out results/sensors/read_timing.csv
+    os2=$SENSORS/ouster/OS-2-128-U1_v2.3.0_1024x10.pcap
+    fresh results/sensors/benchmark_os2_128
+    taskset -c 0 flic benchmark "$os2" --methods flic0,flic14,bridge,bogoslavskyi --repeat 50 \
+      --rounds 3 --out results/sensors/benchmark_os2_128
+    tmp=$(mktemp -d)
+    flic segment "$os2" --method flic14 --render 0 --out "$tmp/seg"
+    fresh results/sensors/segment_os2_128
+    mkdir -p results/sensors/segment_os2_128
+    cp "$tmp"/seg/render_*.png "$tmp"/seg/views_*.png results/sensors/segment_os2_128/
+    # every other recording with the default methods, one table
+    for rec in ouster/OS-1-64_1024x10_fw20.pcap ouster/OS-2-128-U1_v2.3.0_1024x10.pcap \
+      velodyne/vlp16_velodyne_example.pcap velodyne/nebula_vlp16/1673400472138016708.pcd \
+      pcd/robosense_helios16p_1691031766781547066.pcd \
+      nuscenes/n015-2018-07-24-11-22-45+0800__LIDAR_TOP__1532402927647951.pcd.bin; do
+      taskset -c 1 flic benchmark "$SENSORS/$rec" --repeat 20 --no-plots --out "$tmp/$(basename "$rec")"
+    done
+    python - "$tmp" results/sensors/benchmark_all.csv <<'PY'
+import sys
+from pathlib import Path
+
+import pandas as pd
+
+parts = []
+for folder in sorted(p for p in Path(sys.argv[1]).iterdir() if (p / "summary.csv").exists()):
+    df = pd.read_csv(folder / "summary.csv")
+    df.insert(0, "recording", folder.name)
+    parts.append(df[["recording", "method", "kind", "frames", "median_ms", "hz_median",
+                     "points_median", "clusters_median"]])
+pd.concat(parts).to_csv(sys.argv[2], index=False)
+PY
+    rm -rf "$tmp"
+    ;;
+  sensors-synthetic)
+    # the synthetic streets as each sensor profile sees them: results/sensors-synthetic/README.md
+    out=results/sensors-synthetic
+    python scripts/sensors_synthetic.py --frames 10 --out "$out" --work "$TMP/sensors" \
+      --sensors vlp32c,hdl32e,hdl64e,os1-64,os1-128,os2-128
+    python scripts/sensors_synthetic.py --frames 10 --out "$out" --work "$TMP/sensors" \
+      --sensors vlp16 --extra-config "$out/bridge-defaults.toml" \
+      --methods bogoslavskyi,flic0,flic1,flic6,flic14,flic1n,flic6n,flic14n,bridge,bridge-defaults,dbscan
+    python scripts/sensor_links.py --work "$TMP/sensors" --frames 10 --out "$out/vertical_links.csv"
+    variants=$(python -c "import tomllib; print(','.join(tomllib.load(open('$out/sweep-bridge/bridge-sweep.toml', 'rb'))['methods']))")
+    python scripts/sensors_synthetic.py --frames 10 --sensors vlp16,hdl32e \
+      --methods "bridge,$variants" --extra-config "$out/sweep-bridge/bridge-sweep.toml" \
+      --out "$out/sweep-bridge" --work "$TMP/sensors-sweep"
+    python scripts/sensors_synthetic.py --frames 20 --sensors vlp16 \
+      --methods flic0,flic14,bridge,bridge-defaults,dbscan --extra-config "$out/bridge-defaults.toml" \
+      --out "$out/vlp16-20frames" --work "$TMP/sensors-20"
+    python scripts/sensors_synthetic.py --frames 10 --methods flic0,flic14,bridge \
+      --ground-remover column --out "$out/ground-column" --work "$TMP/sensors-gc"
+    python scripts/sensors_synthetic.py --frames 20 --methods bridge,dbscan \
+      --sensors vlp32c,hdl32e,os1-64,hdl64e,os2-128,os1-128 \
+      --out "$out/bridge-dbscan-20frames" --work "$TMP/sensors-bd20"
+    ;;
+  bags)
+    # ROS bags: docs/ros.md
+    NUMBA_NUM_THREADS=1 taskset -c 0 python scripts/bags/cloud_speed.py --repeat 300 \
+      > "$TMP/cloud_speed.txt"
+    { echo "# command: NUMBA_NUM_THREADS=1 taskset -c 0 python scripts/bags/cloud_speed.py --repeat 300"
+      cat "$TMP/cloud_speed.txt"; } > results/bags/cloud_speed.txt
+    python scripts/bags/bag_memory.py --lengths 20,2000 --out results/bags/memory.csv
+    bag=$TMP/vlp16-200
+    rm -rf "$bag" "$TMP/latency"
+    python -c "import sys; from pathlib import Path; sys.path.insert(0, 'tests'); \
+from bagtools import cycled_vlp16_bag; cycled_vlp16_bag(Path('../shared/data'), Path('$bag'), 200)"
+    NUMBA_NUM_THREADS=1 taskset -c 0 flic benchmark "$bag" --methods flic14,bogoslavskyi,bridge \
+      --no-plots --out "$TMP/latency"
+    cp "$TMP/latency/latency.csv" results/bags/latency_vlp16_200.csv
+    ;;
+  ouster-sdk)
+    if [ -z "${OUSTER_PY:-}" ]; then
+      echo "step ouster-sdk skipped: set OUSTER_PY to a Python with ouster-sdk installed" >&2
+      continue
+    fi
+    python scripts/sensors/ouster_sdk_comparison.py --sdk-python "$OUSTER_PY"
+    ;;
+  peers)
+    # the field's clusterers (SLR, CVC, ALPINE, HDBSCAN, Euclidean): docs/peers.md
+    ev=results/peers/evaluate
+    for name in main more hdbscan; do fresh "$ev/$name"; done
+    flic evaluate "$DATA" --setting no-ground --semantics oracle --jobs "$JOBS" \
+      --methods bogoslavskyi,flic0,flic1,flic6,flic14,flic1n,flic6n,flic14n,bridge,dbscan,slr,cvc,alpine,alpine-k32 \
+      --out "$ev/main"
+    flic evaluate "$DATA" --setting no-ground --semantics oracle --jobs "$JOBS" \
+      --methods euclidean,alpine-agnostic --out "$ev/more"
+    flic evaluate "$DATA" --frames 0:1 --setting no-ground --semantics oracle \
+      --methods hdbscan,bridge,dbscan,flic0,euclidean --out "$ev/hdbscan"
+    rm -rf "$ev"/*/parts
+    python scripts/peers_which_clusterer.py results/peers/which_clusterer "$ev/main" "$ev/more" \
+      "$ev/hdbscan"
+    # their sweeps: results/peers/sweeps/README.md
+    sample "$TMP/sample-seed0" 20 0
+    bash scripts/peers_sweeps.sh "$DATA" "$TMP/sample-seed0/semantickitti"
+    bash scripts/peers_sweeps_small.sh "$DATA" "$TMP/sample-seed0/semantickitti"
+    ;;
+  peers-fidelity)
+    if [ -z "${FLIC_REF:-}" ]; then
+      echo "step peers-fidelity skipped: set FLIC_REF to the references built by scripts/peers_fidelity.sh" >&2
+      continue
+    fi
+    python scripts/peers_fidelity.py "$DATA" results/peers/fidelity
+    python scripts/peers_ref_diff.py "$DATA" > results/peers/fidelity/ref_diff.txt
+    python scripts/peers_euclidean_fidelity.py "$DATA" results/peers/fidelity
     ;;
   cpp)
     # their C++ against flic, alternating in one session, on both logs; their ground masks

@@ -337,7 +337,7 @@ def test_imap_frames_dask_window() -> None:
 def test_dask_cluster_started_from_the_command_line(
     reference: Path, sample_root: Path, tmp_path: Path
 ) -> None:
-    """The README's multi-machine recipe on one machine: `dask scheduler` and `dask worker`
+    """docs/distributed.md's multi-machine recipe on one machine: `dask scheduler` and `dask worker`
     started as commands, `flic evaluate --scheduler` sends the frames to them."""
     import json
     import subprocess

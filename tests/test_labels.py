@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from hypothesis import given
+from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from flic_cli.labels import MAX_ID, N_IDS, encode, has_instance, instance, semantic
@@ -12,6 +12,7 @@ from flic_cli.labels import MAX_ID, N_IDS, encode, has_instance, instance, seman
 ids = st.integers(0, 65535)
 
 
+@settings(max_examples=50, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(st.lists(st.tuples(ids, ids), min_size=1, max_size=40))
 def test_encode_is_instance_times_65536_plus_semantic(pairs: list[tuple[int, int]]) -> None:
     sem = np.array([p[0] for p in pairs])

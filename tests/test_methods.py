@@ -451,7 +451,7 @@ def test_segment_gives_the_labels_of_the_previous_kernel_on_the_shared_frames(ki
 
 
 def test_the_shipped_example_config_loads_and_its_map_offsets_are_used():
-    # configs/example.toml is what the README points users to; a map with an offset of 0 was
+    # configs/example.toml is what docs/cli.md points users to; a map with an offset of 0 was
     # once refused there (offsets were validated as steps)
     from pathlib import Path
 

@@ -121,8 +121,8 @@ def benchmark(
     seqs, frm = _selection(sequences, frames)
     seqs = [topic] if topic else seqs
     sel = Selection(
-        _data_or_sample(data, moosmann=True), seqs, frm, setting, ground_remover, cfg,
-        skip_bad=skip_bad,
+        _data_or_sample(data, moosmann=True), seqs, frm, setting=setting,
+        ground_remover=ground_remover, config=cfg, skip_bad=skip_bad,
     )  # fmt: skip
     result = run_benchmark(
         BenchmarkRun(sel, out, names, warmup, repeat, rounds, slow_every, threads, plots)

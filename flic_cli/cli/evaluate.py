@@ -104,7 +104,10 @@ def evaluate(
     skip_missing: SkipMissingOpt = False,
     skip_bad: SkipBadOpt = False,
     ground_remover: Annotated[
-        str, ground_remover_option("Ground extraction of the `ground` setting (SPEC 4: `paper`).")
+        str,
+        ground_remover_option(
+            "Ground extraction of the `ground` setting (docs/specification.md: `paper`)."
+        ),
     ] = "paper",
     sequences: SequencesOpt = None,
     frames: FramesOpt = None,
@@ -125,10 +128,10 @@ def evaluate(
         ),
     ] = None,
 ) -> None:
-    """Score methods with the paper's protocol (SPEC 4): GT objects are thing instances with at
-    least 100 points, each takes its best-overlap cluster (one cluster, one object), IoU over 3D
-    points; IoU_mu over all objects of all frames, P_x for x = 0.50 ... 0.95 and P_mu. Prints the
-    paper's Table 1 and writes the tables as CSV."""
+    """Score methods with the paper's protocol (docs/specification.md): GT objects are thing
+    instances with at least 100 points, each takes its best-overlap cluster (one cluster, one
+    object), IoU over 3D points; IoU_mu over all objects of all frames, P_x for x = 0.50 ...
+    0.95 and P_mu. Prints the paper's Table 1 and writes the tables as CSV."""
     from flic_cli.config import load_config
     from flic_cli.runs.evaluate import run_evaluate
     from flic_cli.runs.pipeline import parse_methods
@@ -152,8 +155,9 @@ def evaluate(
 
     try:
         sel = Selection(
-            _data_or_sample(data), seqs, frm, setting, ground_remover, cfg, jobs, skip_bad
-        )
+            _data_or_sample(data), seqs, frm, setting=setting, ground_remover=ground_remover,
+            config=cfg, jobs=jobs, skip_bad=skip_bad,
+        )  # fmt: skip
         result = run_evaluate(
             EvaluateRun(
                 sel,
@@ -238,8 +242,9 @@ def sweep_threshold(
     seqs, frm = _selection(sequences, frames)
     try:
         sel = Selection(
-            _data_or_sample(data), seqs, frm, setting, ground_remover, cfg, jobs, skip_bad
-        )
+            _data_or_sample(data), seqs, frm, setting=setting, ground_remover=ground_remover,
+            config=cfg, jobs=jobs, skip_bad=skip_bad,
+        )  # fmt: skip
         result = run_sweep(
             SweepRun(
                 sel,

@@ -99,8 +99,8 @@ def segment(
     seqs, frm = _selection(sequences, frames)
     seqs = [topic] if topic else seqs
     sel = Selection(
-        _data_or_sample(data), seqs, frm, setting, ground_remover, load_config(config), jobs,
-        skip_bad,
+        _data_or_sample(data), seqs, frm, setting=setting, ground_remover=ground_remover,
+        config=load_config(config), jobs=jobs, skip_bad=skip_bad,
     )  # fmt: skip
     summary = run_segment(
         SegmentRun(sel, out, resolve_method(method, mc), render, semantics, tuple(export or ()))

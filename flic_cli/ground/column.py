@@ -59,8 +59,9 @@ sensor's own image.
    across the side of a car, a hedge or a fence lies at one range and height, as ground does,
    and once a single cell of it was taken, the row test carried the ground along it (on the
    shared frames a parked car 23 m out lost 37 of its 241 points, 22 with the test; the ground
-   precision goes from 95.48 to 95.84 %, ``results/ground/README.md``). Cells taken this way
-   are not references themselves (no chains), and the column models do not follow them.
+   precision goes from 95.48 to 95.84 %, ``results/ground/sweep_column_neighbours.csv``). Cells
+   taken this way are not references themselves (no chains), and the column models do not
+   follow them.
 7. **Hidden points** (projected scans only: a sensor's own image holds one point per pixel). A
    pixel's range is that of its nearest point; on a projected KITTI scan about 9 % of the points
    lie behind the nearest one of their pixel, and every point of a pixel would share its

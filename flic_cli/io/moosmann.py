@@ -1,4 +1,4 @@
-"""Moosmann-style logs: 16-bit greyscale PNG range images plus ``img.cfg`` (SPEC §1).
+"""Moosmann-style logs: 16-bit greyscale PNG range images plus ``img.cfg`` (docs/specification.md).
 
 A log is a folder with ``scanNNNNN.png`` files (directly or in a ``range/`` subfolder) and an
 ``img.cfg`` (in the log folder, or beside the PNGs). Pixel value / 500 = range in metres,

@@ -1,6 +1,6 @@
 """SemanticKITTI: scans (``.bin``), labels (``.label``), calibration, poses, predictions.
 
-Layout (SPEC §1): ``<root>/sequences/<NN>/velodyne/<XXXXXX>.bin`` and
+Layout (docs/specification.md): ``<root>/sequences/<NN>/velodyne/<XXXXXX>.bin`` and
 ``<root>/sequences/<NN>/labels/<XXXXXX>.label``; ``<root>`` may also be one sequence folder.
 Predictions use the ``.label`` encoding with the cluster id in the upper 16 bits and the semantic
 class (0 = unlabeled unless semantics are given) in the lower 16 bits, in

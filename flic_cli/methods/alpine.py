@@ -10,7 +10,8 @@ cKDTree`) closer than the class's box width; the clusters are the connected comp
 bounding rectangle exceeds the class's box (times ``margin``) is cut in two at the largest link
 distance that does so (a bisection on the distance, to 1e-3 of the width), recursively.
 
-Box table (length, width in metres; the reference's SemanticKITTI "web" sizes, SPEC section 5):
+Box table (length, width in metres; the reference's SemanticKITTI "web" sizes, docs/specification.md
+section 3):
 car 4.4 x 1.8, bicycle 1.75 x 0.61, motorcycle 2.2 x 0.95, truck 10 x 3, other-vehicle 10 x 3,
 person 0.94 x 0.94, bicyclist 1.75 x 0.61, motorcyclist 2.2 x 0.95.
 

@@ -240,7 +240,7 @@ def label_row(
 def attach(labels: np.ndarray, size: np.ndarray, attached: np.ndarray) -> None:
     """Give every held pixel the provisional label of the pixel standing on it and add its
     points to that label's size (``attached``: (K, 3) held pixel, target pixel or -1, points;
-    see :attr:`flic_cli.range_image.RangeImage.attached`). A held pixel is no node, so it links
+    see :attr:`flic_cli.ground.base.Ground.attached`). A held pixel is no node, so it links
     nothing; a target that is no node gives it none."""
     for k in range(attached.shape[0]):
         t = attached[k, 1]

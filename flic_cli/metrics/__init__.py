@@ -1,7 +1,7 @@
 """Evaluation: plain functions over numpy arrays of one frame, or pooled over many.
 
-- :mod:`flic_cli.metrics.instances` -- the paper's protocol (SPEC section 4): object matching,
-  IoU, P_x, over- and under-segmentation.
+- :mod:`flic_cli.metrics.instances` -- the paper's protocol (docs/specification.md):
+  object matching, IoU, P_x, over- and under-segmentation.
 
 Class ids and groups (things, ground) come from :mod:`flic_cli.classes`.
 """

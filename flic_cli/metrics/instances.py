@@ -1,4 +1,4 @@
-"""Instance scores of the FLIC paper (SPEC section 4, paper section 4.B): IoU, P_x, fragments.
+"""Instance scores of the FLIC paper (docs/specification.md, paper 4.B): IoU, P_x, fragments.
 
 Everything here is a plain function over numpy arrays of one frame (or, for :func:`summarize`,
 of the pooled objects of many frames); nothing keeps state between calls.
@@ -64,7 +64,7 @@ IOU_THRESHOLDS: tuple[float, ...] = tuple(
     float(x) for x in np.round(np.linspace(0.50, 0.95, 10), 2)
 )
 
-#: Ground-truth objects with fewer points than this are ignored (SPEC section 4).
+#: Ground-truth objects with fewer points than this are ignored (docs/specification.md).
 MIN_OBJECT_POINTS: int = 100
 
 #: A cluster counts as a fragment of an object (or an object as held by a cluster) from this

@@ -1,4 +1,4 @@
-"""``flic evaluate``: the paper's quality protocol (SPEC section 4) over a whole dataset.
+"""``flic evaluate``: the paper's quality protocol (docs/specification.md) over a whole dataset.
 
 The run, as a list of steps (:func:`run_evaluate`):
 
@@ -401,7 +401,8 @@ def _caption(table: pd.DataFrame, n_frames: int, settings: tuple[str, ...], remo
     n_objects = int(table["objects"].max()) if len(table) else 0
     remover_text = {"paper": "the paper's", "own": "each method's own"}.get(remover, remover)
     return (
-        f"SPEC 4 protocol, {n_frames} frames, {n_objects} GT objects (>= 100 points); "
+        f"the paper's protocol (docs/specification.md), {n_frames} frames, "
+        f"{n_objects} GT objects (>= 100 points); "
         f"IoU_mu and P_x in %, [95% bootstrap interval over frames], P_x from the {p_setting} "
         "setting"
         + (

@@ -115,7 +115,7 @@ _VLP32C_ELEVATION_DEG = [
 ]  # fmt: skip
 
 #: Ouster OS-1-64: ``beam_altitude_angles`` of a real unit (the metadata of ouster-sdk's test
-#: recording ``OS-1-64_1024x10_fw20``, BSD-3-Clause; ``../shared/data/sensors/ouster/``),
+#: recording ``OS-1-64_1024x10_fw20``, BSD-3-Clause; docs/specification.md, section 4),
 #: +16.46 .. -16.75 deg, gaps alternating about 0.53 and 0.48 deg.
 _OS1_64_ELEVATION_DEG = [
     16.46, 15.88, 15.32, 14.8, 14.29, 13.71, 13.17, 12.63, 12.15, 11.58, 11.05, 10.52, 10.05,
