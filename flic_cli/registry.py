@@ -38,6 +38,10 @@ class Entry:
     requires : the import name of an optional package the class needs (None: none); checked by
         :func:`check_installed` before the class is loaded.
     install : how to install it, for the error message (``"pip install 'flic[ouster]'"``).
+    exports : (dataset formats) the ``flic segment --export`` kinds only this format's input can
+        take (``"mcap"``, ``"bag"``: messages that keep the input's stamps and frame id).
+    beam_angles : (dataset formats) where the beam angles of an image come from when the format
+        gives no sensor model (``flic info``), e.g. ``"metadata (img.cfg)"``; None: estimated.
     """
 
     target: str
@@ -46,6 +50,8 @@ class Entry:
     frames_per_file: Literal["one", "many"] = "one"
     requires: str | None = None
     install: str | None = None
+    exports: tuple[str, ...] = ()
+    beam_angles: str | None = None
 
     def missing(self) -> str | None:
         """None when the class can be used; else the one-line reason (package and install hint)."""
@@ -66,6 +72,7 @@ FORMATS: dict[str, Entry] = {
     "moosmann": Entry(
         "flic_cli.io.moosmann:MoosmannDataset",
         "a Moosmann log (img.cfg + scanNNNNN.png 16-bit range images) or a folder of logs",
+        beam_angles="metadata (img.cfg)",
     ),
     "ouster": Entry(
         "flic_cli.io.ouster:OusterPcapDataset",
@@ -101,6 +108,7 @@ FORMATS: dict[str, Entry] = {
         frames_per_file="many",
         requires="rosbags",
         install="pip install rosbags",
+        exports=("mcap", "bag"),
     ),
 }
 

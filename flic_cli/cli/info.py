@@ -92,7 +92,7 @@ def describe(path: Any, sequences: Any, frames: Any, sample: int = 20) -> list[s
             projections.add(image.projection)
         n_partial = len(file_info.partial) if file_info is not None else 0
         text = f"{len(refs)}" + (
-            " revolution(s)" if ds.format in ("ouster", "velodyne", "bag") else ""
+            " revolution(s)" if registry.FORMATS[ds.format].frames_per_file == "many" else ""
         )
         if n_partial:
             text += f"; left out (incomplete): {'; '.join(file_info.partial)}"
@@ -116,8 +116,8 @@ def describe(path: Any, sequences: Any, frames: Any, sample: int = 20) -> list[s
         if model is not None:
             for key, value in desc.items():
                 lines.append(f"  {key}: {value}")
-        elif ds.format == "moosmann":
-            lines.append("  beam angles from: metadata (img.cfg)")
+        elif registry.FORMATS[ds.format].beam_angles is not None:
+            lines.append(f"  beam angles from: {registry.FORMATS[ds.format].beam_angles}")
         else:
             how = "ring recovery from the scan order" if "rings" in projections else "spherical"
             lines.append(f"  beam angles from: estimated ({how}; [projection] of the config)")

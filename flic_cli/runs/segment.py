@@ -23,6 +23,7 @@ from typing import Any
 
 import numpy as np
 
+from flic_cli import registry
 from flic_cli.errors import FlicInputError
 from flic_cli.ground.base import Ground
 from flic_cli.io import open_dataset
@@ -189,9 +190,10 @@ def run_segment(spec: SegmentRun) -> SegmentSummary:
         shown = sorted({r.frame for r in refs})
         span = f"{shown[0]}..{shown[-1]}" if len(shown) > 1 else str(shown[0])
         raise FlicInputError(None, f"--render {render}: no such frame among the selected ({span})")
-    bag_exports = [e for e in export if e in ("mcap", "bag")]
-    if bag_exports and ds.format != "bag":
-        raise FlicInputError(sel.data, f"--export {bag_exports[0]} needs a bag or MCAP input")
+    own_exports = {x for e in registry.FORMATS.values() for x in e.exports}
+    needs_own = [e for e in export if e in own_exports]
+    if needs_own and needs_own[0] not in registry.FORMATS[ds.format].exports:
+        raise FlicInputError(sel.data, f"--export {needs_own[0]} needs a bag or MCAP input")
     seg = build_segmenter(config, method, setting, sel.remover_or(OWN))
     job = SegmentJob(ds, seg, setting, config.projection, wanted)
     loop = FrameLoop(job, refs, sel.jobs, None, sel.skip_bad, f"segment {method}", sel.progress)
@@ -199,7 +201,7 @@ def run_segment(spec: SegmentRun) -> SegmentSummary:
     renders = []
     latencies: list[float] = []
     with staged_folder(out) as stage, ExitStack() as writers:
-        bag_writers = [_bag_writer(writers, stage, ds, e, wanted is not None) for e in bag_exports]
+        bag_writers = [_bag_writer(writers, stage, ds, e, wanted is not None) for e in needs_own]
         for ref, result in loop:
             latencies.append(result.latency_ms)
             for w in bag_writers:
