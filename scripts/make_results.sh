@@ -5,7 +5,7 @@
 #     . .venv/bin/activate && bash scripts/make_results.sh [step ...]
 # Steps, in this order (default: all of them):
 #     bench repeats evaluate ground synthetic ground-sweep ground-speed sweeps bridge-grid
-#     coverage dbscan pictures profile sensors sensors-synthetic bags peers cpp panoptic
+#     coverage labels dbscan pictures profile sensors sensors-synthetic bags peers cpp panoptic
 #     ouster-sdk peers-fidelity
 # The benchmarks come first, on a quiet machine: evaluate and ground take their times from them.
 # Four steps need something outside the repository; without it they say so and are skipped:
@@ -31,7 +31,7 @@ METHODS=bogoslavskyi,flic0,flic1,flic6,flic14,flic1n,flic6n,flic14n,bridge,dbsca
 PEERS=flic0-scipy,flic14-scipy
 GROUND_METHODS=flic0,flic1,flic6,flic14,flic1n,flic6n,flic14n,bridge,dbscan-fast
 DEFAULT="bench repeats evaluate ground synthetic ground-sweep ground-speed sweeps bridge-grid"
-DEFAULT="$DEFAULT coverage dbscan pictures profile sensors sensors-synthetic bags peers cpp"
+DEFAULT="$DEFAULT coverage labels dbscan pictures profile sensors sensors-synthetic bags peers cpp"
 DEFAULT="$DEFAULT panoptic ouster-sdk peers-fidelity"
 SENSORS=../shared/data/sensors
 STEPS=${*:-$DEFAULT}
@@ -187,6 +187,9 @@ for step in $STEPS; do
     ;;
   coverage)
     python scripts/projection_coverage.py "$DATA" --out results/projection_coverage.csv
+    ;;
+  labels)
+    python scripts/check_labels.py --shared "$DATA" --out results/labels/fingerprint.csv
     ;;
   dbscan)
     python scripts/dbscan_backends.py "$DATA" results/dbscan-backends
