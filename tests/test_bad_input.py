@@ -12,6 +12,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from oracles import file_tree
 from PIL import Image
 
 from flic_cli.cli import main
@@ -319,14 +320,6 @@ def _fill(text: str, env: Env) -> str:
     )
 
 
-def _snapshot(folder: Path) -> dict[str, bytes]:
-    if not folder.exists():
-        return {}
-    if folder.is_file():
-        return {".": folder.read_bytes()}
-    return {str(p.relative_to(folder)): p.read_bytes() for p in folder.rglob("*") if p.is_file()}
-
-
 @pytest.fixture
 def env(small_sample, tmp_path: Path) -> Env:
     kitti = tmp_path / "kitti"
@@ -346,7 +339,7 @@ def test_bad_input(case: Case, env: Env, capsys: pytest.CaptureFixture[str]) -> 
     text = case.setup(env) if case.setup is not None else None
     if text is not None:
         env.cfg(text)
-    before = _snapshot(env.out)
+    before = file_tree(env.out)
     cwd = os.getcwd()
     os.chdir(env.tmp)  # nothing may land in the working folder either
     try:
@@ -362,7 +355,7 @@ def test_bad_input(case: Case, env: Env, capsys: pytest.CaptureFixture[str]) -> 
     assert "Traceback" not in captured.err + captured.out
     for word in case.names:
         assert _fill(word, env) in errors[0], errors[0]
-    assert _snapshot(env.out) == before, "the failed run left output behind"
+    assert file_tree(env.out) == before, "the failed run left output behind"
     assert not (env.tmp / "flic-out").exists()
     leftovers = [p for p in env.tmp.rglob(".*staging*")] + list(env.tmp.rglob(".*.tmp-*"))
     assert not leftovers

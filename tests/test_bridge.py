@@ -7,26 +7,13 @@ import pytest
 import reference_kernels  # tests/reference_kernels.py: the kernels before issue 11's rework
 from hypothesis import assume, given, settings
 from hypothesis import strategies as st
-from scipy.sparse import coo_matrix
-from scipy.sparse.csgraph import connected_components
+from oracles import image_components, surface_scenes, xyz_of
 
 from flic_cli.methods import Bridge, bridge_labels, flic_labels
 from flic_cli.range_image import RangeImage
 
 LEFT, UP = (0, -1), (-1, 0)
 DIAGONALS = ((-1, -1), (-1, 1))
-
-
-def xyz_of(ranges: np.ndarray, elevation: np.ndarray) -> np.ndarray:
-    """(H, W, 3) float64 points from the angles of the image convention (no law of cosines)."""
-    h, w = ranges.shape
-    img = RangeImage(ranges.astype(np.float32), elevation, np.zeros(0, np.int64), "native")
-    el = img.elevation[:, None]
-    az = img.azimuth[None, :]
-    r = ranges.astype(np.float64)
-    return np.stack(
-        [r * np.cos(el) * np.cos(az), r * np.cos(el) * np.sin(az), r * np.sin(el) + 0 * az], -1
-    )
 
 
 def bridge_graph(ranges, elevation, mask, threshold, gamma_deg, reach):
@@ -67,45 +54,9 @@ def bridge_graph(ranges, elevation, mask, threshold, gamma_deg, reach):
     return edges, margins
 
 
-def components(shape, node, edges, weights, min_size):
-    """Connected components, dropped under ``min_size`` summed weights, numbered in raster order."""
-    n = shape[0] * shape[1]
-    a = [e[0] for e in edges]
-    b = [e[1] for e in edges]
-    _, comp = connected_components(coo_matrix((np.ones(len(a)), (a, b)), shape=(n, n)), False)
-    flat_node = node.reshape(-1)
-    size = np.bincount(comp[flat_node], weights=weights.reshape(-1)[flat_node], minlength=n)
-    out = np.zeros(n, np.int32)
-    numbers: dict[int, int] = {}
-    for i in np.flatnonzero(flat_node):
-        if size[comp[i]] >= min_size:
-            out[i] = numbers.setdefault(int(comp[i]), len(numbers) + 1)
-    return out.reshape(shape)
-
-
-@st.composite
-def scenes(draw):
-    """Small range images with surfaces, jumps, holes, near occluders and a mask."""
-    h = draw(st.integers(1, 8))
-    w = draw(st.integers(1, 20))
-    rng = np.random.default_rng(draw(st.integers(0, 2**32 - 1)))
-    # a few flat-ish surfaces at different depths, side by side
-    cuts = np.sort(rng.integers(0, w + 1, rng.integers(0, 4)))
-    depth = rng.uniform(2.0, 25.0, cuts.size + 1)
-    ranges = depth[np.searchsorted(cuts, np.arange(w), side="right")][None, :].repeat(h, 0)
-    ranges = ranges * (1.0 + rng.normal(0.0, draw(st.sampled_from([0.0, 0.01, 0.05])), (h, w)))
-    occluder = rng.random((h, w)) < draw(st.sampled_from([0.0, 0.15, 0.3]))
-    ranges[occluder] *= rng.uniform(0.2, 0.9, occluder.sum())
-    ranges[rng.random((h, w)) < draw(st.sampled_from([0.0, 0.3, 0.5]))] = 0.0
-    elevation = np.sort(rng.uniform(-0.45, 0.05, h))[::-1].copy()
-    mask = rng.random((h, w)) >= draw(st.sampled_from([0.0, 0.2]))
-    weights = rng.integers(0, 5, (h, w)).astype(np.int32)
-    return ranges.astype(np.float32), elevation, mask, weights
-
-
 @settings(max_examples=400, deadline=None)
 @given(
-    scene=scenes(),
+    scene=surface_scenes(),
     threshold=st.floats(0.2, 3.0),
     gamma=st.sampled_from([0.0, 1.0, 2.0, 5.0]),
     reach=st.integers(1, 20),
@@ -116,14 +67,14 @@ def test_bridge_equals_components_of_its_graph(scene, threshold, gamma, reach, m
     edges, margins = bridge_graph(ranges, elevation, mask, threshold, gamma, reach)
     assume(all(abs(m) > 1e-4 for m in margins))
     node = mask & (ranges > 0)
-    expected = components(ranges.shape, node, edges, weights, min_size)
+    expected = image_components(ranges.shape, node, edges, min_size, weights)
     got = bridge_labels(ranges, elevation, threshold, gamma, reach, min_size, mask, weights)
     np.testing.assert_array_equal(got, expected)
 
 
 @settings(max_examples=300, deadline=None)
 @given(
-    scene=scenes(),
+    scene=surface_scenes(),
     threshold=st.floats(0.2, 3.0),
     gamma=st.sampled_from([0.0, 1.0, 2.0, 5.0]),
     reach=st.integers(1, 20),
@@ -146,7 +97,7 @@ def test_bridge_gives_the_labels_of_the_previous_kernel(
 
 
 @settings(max_examples=200, deadline=None)
-@given(scene=scenes(), threshold=st.floats(0.2, 3.0))
+@given(scene=surface_scenes(), threshold=st.floats(0.2, 3.0))
 def test_reach_one_refines_nothing_of_flic(scene, threshold):
     # With reach 1 and a fixed threshold every FLIC (0 MC) edge is a Bridge edge: each FLIC
     # cluster lies inside one Bridge cluster.

@@ -9,20 +9,11 @@ import pytest
 import reference_kernels  # tests/reference_kernels.py: the kernels before issue 11's rework
 from hypothesis import assume, given, settings
 from hypothesis import strategies as st
-from scipy.sparse import coo_matrix
-from scipy.sparse.csgraph import connected_components
+from oracles import canonical, image_components, pixel_weights, range_images, xyz_of
 
 from flic_cli.methods import bogoslavskyi_labels, dbscan_labels, drop_small, flic_labels
 from flic_cli.methods.bogoslavskyi import bogoslavskyi_beta
 from flic_cli.methods.flic import flic_labels_scipy
-from flic_cli.range_image import RangeImage
-
-
-def xyz_of(ranges: np.ndarray, elevation: np.ndarray) -> np.ndarray:
-    """(H, W, 3) Cartesian points, computed directly from the angles (no law of cosines)."""
-    h, w = ranges.shape
-    img = RangeImage(ranges.astype(np.float32), elevation, np.zeros(0, np.int64), "native")
-    return img.to_points().astype(np.float64).reshape(h, w, 3)
 
 
 def neighbour_pairs(h: int, w: int, maps, mc_mode: str):
@@ -42,64 +33,15 @@ def neighbour_pairs(h: int, w: int, maps, mc_mode: str):
                     yield (r, c), (r, (c + kc) % w)
 
 
-def canonical(labels: np.ndarray) -> np.ndarray:
-    """Renumber labels 1..K in raster order of first appearance (0 stays 0)."""
-    flat = labels.reshape(-1)
-    out = np.zeros_like(flat)
-    mapping: dict[int, int] = {}
-    for i, v in enumerate(flat):
-        if v > 0:
-            out[i] = mapping.setdefault(int(v), len(mapping) + 1)
-    return out.reshape(labels.shape)
-
-
 def brute_force(ranges, valid, pairs, linked, min_size, weights=None):
+    """The components of the graph whose edges are the ``pairs`` of valid pixels ``linked``."""
     h, w = ranges.shape
-    a, b = [], []
-    for (r1, c1), (r2, c2) in pairs:
-        if (r1, c1) != (r2, c2) and valid[r1, c1] and valid[r2, c2] and linked(r1, c1, r2, c2):
-            a.append(r1 * w + c1)
-            b.append(r2 * w + c2)
-    n = h * w
-    graph = coo_matrix((np.ones(len(a)), (a, b)), shape=(n, n))
-    _, comp = connected_components(graph, directed=False)
-    comp = comp + 1
-    comp[~valid.reshape(-1)] = 0
-    if weights is None:
-        return canonical(drop_small(comp, min_size).reshape(h, w))
-    # the minimum size in points: sum the weights of every component by hand
-    sizes: dict[int, int] = {}
-    for i, c in enumerate(comp):
-        if c > 0:
-            sizes[int(c)] = sizes.get(int(c), 0) + int(weights.reshape(-1)[i])
-    kept = np.array([c if c > 0 and sizes[int(c)] >= min_size else 0 for c in comp])
-    return canonical(kept.reshape(h, w))
-
-
-@st.composite
-def range_images(draw):
-    h = draw(st.integers(1, 7))
-    w = draw(st.integers(2, 14))
-    seed = draw(st.integers(0, 2**32 - 1))
-    rng = np.random.default_rng(seed)
-    ranges = rng.uniform(2.0, 12.0, (h, w))
-    # smooth surfaces plus jumps, so that both connected and separated pairs occur
-    ranges = np.where(rng.random((h, w)) < 0.5, np.round(ranges / 3) * 3, ranges)
-    ranges[rng.random((h, w)) < draw(st.floats(0.0, 0.4))] = 0.0
-    elevation = np.sort(rng.uniform(-0.45, 0.05, h))[::-1].copy()
-    return ranges.astype(np.float32), elevation
-
-
-@st.composite
-def pixel_weights(draw, shape):
-    """None (count pixels), all ones, or random points per pixel (0..5)."""
-    kind = draw(st.sampled_from(["none", "ones", "random"]))
-    if kind == "none":
-        return None
-    if kind == "ones":
-        return np.ones(shape, np.int32)
-    seed = draw(st.integers(0, 2**32 - 1))
-    return np.random.default_rng(seed).integers(0, 6, shape).astype(np.int32)
+    edges = [
+        (r1 * w + c1, r2 * w + c2)
+        for (r1, c1), (r2, c2) in pairs
+        if (r1, c1) != (r2, c2) and valid[r1, c1] and valid[r2, c2] and linked(r1, c1, r2, c2)
+    ]
+    return image_components((h, w), valid, edges, min_size, weights)
 
 
 maps_strategy = st.lists(

@@ -9,6 +9,7 @@ import pandas as pd
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from oracles import lab
 
 from flic_cli.classes import CLASS_NAMES, GROUND_CLASSES, THING_CLASSES, ground_mask, thing_mask
 from flic_cli.metrics import (
@@ -23,11 +24,6 @@ from flic_cli.metrics import (
 
 CAR, PERSON, ROAD, BUILDING, VEGETATION, MOVING_CAR = 10, 30, 40, 50, 70, 252
 P_KEYS = [f"p_{x:.2f}" for x in IOU_THRESHOLDS]
-
-
-def lab(semantic: int, instance: int = 0) -> int:
-    """SemanticKITTI label value: instance in the upper 16 bits, class in the lower."""
-    return (instance << 16) | semantic
 
 
 def frame(*parts: tuple[int, int, int]) -> tuple[np.ndarray, np.ndarray]:

@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from oracles import lab
 
 from flic_cli.classes import (
     CLASS_NAMES,
@@ -36,10 +37,6 @@ CAR, BICYCLE, PERSON, ROAD, BUILDING, LANE, OTHER_STRUCTURE, MOVING_CAR = (
     10, 11, 30, 40, 50, 60, 52, 252,
 )  # fmt: skip
 L_CAR, L_ROAD, L_BUILDING = 1, 9, 13
-
-
-def lab(semantic: int, instance: int = 0) -> int:
-    return (instance << 16) | semantic
 
 
 def runs(*parts: tuple[int, int, int]) -> tuple[np.ndarray, np.ndarray]:

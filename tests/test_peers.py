@@ -4,8 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from scipy.sparse import coo_matrix
-from scipy.sparse.csgraph import connected_components
+from oracles import graph_components, same_partition
 
 from flic_cli.errors import FlicInputError
 from flic_cli.ground.base import Ground
@@ -16,20 +15,6 @@ from flic_cli.methods.hdbscan import Hdbscan
 from flic_cli.methods.slr import Slr, slr_pixels
 from flic_cli.range_image import RangeImage
 from flic_cli.runs.pipeline import needs_semantics, segment_with
-
-
-def graph_components(n: int, edges: list[tuple[int, int]]) -> np.ndarray:
-    a = np.array([e[0] for e in edges] + [0], dtype=np.int64)
-    b = np.array([e[1] for e in edges] + [0], dtype=np.int64)
-    g = coo_matrix((np.ones(a.size), (a, b)), shape=(n, n))
-    return connected_components(g, directed=False)[1]
-
-
-def same_partition(a: np.ndarray, b: np.ndarray) -> bool:
-    """Whether two labelings group the elements identically (labels may differ)."""
-    a, b = np.asarray(a), np.asarray(b)
-    pairs = np.unique(np.stack([a, b]), axis=1)
-    return pairs.shape[1] == np.unique(a).size == np.unique(b).size
 
 
 def sensor_image(points: np.ndarray) -> RangeImage:
@@ -277,6 +262,7 @@ def test_hdbscan_separates_blobs_and_leaves_noise() -> None:
 # ---- the runs ------------------------------------------------------------------------------
 
 
+@pytest.mark.slow
 def test_evaluate_runs_every_new_method_with_oracle_semantics(
     sample_root,
     tmp_path,  # noqa: ANN001

@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from oracles import lab
 from PIL import Image
 
 from flic_cli.metrics import segmentation_stats
@@ -23,10 +24,6 @@ from flic_cli.plots import (
 from flic_cli.projection import project_points
 
 CAR, ROAD, BUILDING = 10, 40, 50
-
-
-def lab(semantic: int, instance: int = 0) -> int:
-    return (instance << 16) | semantic
 
 
 def assert_png(path: Path) -> tuple[int, int]:

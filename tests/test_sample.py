@@ -6,6 +6,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from oracles import file_tree
 from PIL import Image
 
 from flic_cli import sample
@@ -31,12 +32,6 @@ def _read(paths: sample.SamplePaths, k: int) -> tuple[np.ndarray, np.ndarray]:
     return pts, labels
 
 
-def _files(root: Path) -> dict[str, bytes]:
-    return {
-        str(p.relative_to(root)): p.read_bytes() for p in sorted(root.rglob("*")) if p.is_file()
-    }
-
-
 def test_pitch_table() -> None:
     p = sample.HDL64_PITCH_DEG
     assert p.shape == (64,)
@@ -49,7 +44,7 @@ def test_pitch_table() -> None:
 def test_deterministic(tmp_path: Path, written: sample.SamplePaths) -> None:
     again = sample.write_sample(tmp_path, frames=FRAMES, seed=0)
     root_a = written.kitti_root.parent
-    a, b = _files(root_a), _files(again.kitti_root.parent)
+    a, b = file_tree(root_a), file_tree(again.kitti_root.parent)
     assert a.keys() == b.keys()
     assert all(a[k] == b[k] for k in a)
     assert again.kitti_root == tmp_path / "semantickitti"

@@ -9,6 +9,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from oracles import file_tree
 from typer.testing import CliRunner
 
 from flic_cli import sample
@@ -33,14 +34,6 @@ EXPECTED = {
     "os1-128": (128, 2048),
     "os2-128": (128, 1024),
 }
-
-
-def _tree(root: Path) -> dict[str, bytes]:
-    return {
-        p.relative_to(root).as_posix(): p.read_bytes()
-        for p in sorted(root.rglob("*"))
-        if p.is_file()
-    }
 
 
 def test_the_issue_names_every_profile() -> None:
@@ -159,12 +152,13 @@ def test_sensor_toml_is_a_config(written) -> None:
     )
 
 
+@pytest.mark.slow
 def test_default_profile_is_the_sample_as_before(tmp_path: Path) -> None:
     """``--sensor hdl64e`` is the default sample, and its scans are what the sample cast before
     the profiles existed: the HDL-64E table, 2048 columns, the noise stream ``[seed, frame, 1]``."""
     plain = sample.write_sample(tmp_path / "plain", frames=2)
     named = sample.write_sample(tmp_path / "named", frames=2, sensor="hdl64e")
-    a, b = _tree(tmp_path / "plain"), _tree(tmp_path / "named")
+    a, b = file_tree(tmp_path / "plain"), file_tree(tmp_path / "named")
     assert a == b
     assert "sensor.toml" not in a and plain.config is None
     for k in range(2):
@@ -175,6 +169,7 @@ def test_default_profile_is_the_sample_as_before(tmp_path: Path) -> None:
     assert named.moosmann_truth(0)[0].shape == (64, 870)
 
 
+@pytest.mark.slow
 def test_a_profile_sample_replaces_another(tmp_path: Path) -> None:
     out = tmp_path / "out"
     sample.write_sample(out, frames=1, sensor="vlp16")
@@ -198,6 +193,7 @@ def test_unknown_sensor_is_one_line_and_writes_nothing(tmp_path: Path) -> None:
     assert list(tmp_path.iterdir()) == []
 
 
+@pytest.mark.slow
 def test_cli_writes_a_profile_that_evaluate_reads(tmp_path: Path) -> None:
     out = tmp_path / "vlp16"
     result = runner.invoke(app, ["sample", str(out), "--sensor", "vlp16", "--frames", "1"])
@@ -245,6 +241,7 @@ def test_bridge_parameters_follow_the_beam_gap() -> None:
         street_beam_gap_deg(sky)
 
 
+@pytest.mark.slow
 def test_sensor_toml_carries_the_derived_bridge(tmp_path: Path) -> None:
     from flic_cli.methods.bridge import Bridge
 

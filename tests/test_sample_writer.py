@@ -9,6 +9,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from oracles import file_tree
 from typer.testing import CliRunner
 
 from flic_cli.cli import app
@@ -18,15 +19,6 @@ from flic_cli.sample import HDL64_PITCH_DEG, make_scene, write_sample
 from flic_cli.sample import writer as sample_writer
 
 runner = CliRunner()
-
-
-def tree(root: Path) -> dict[str, bytes]:
-    """Every file under ``root`` (relative path -> content)."""
-    return {
-        p.relative_to(root).as_posix(): p.read_bytes()
-        for p in sorted(root.rglob("*"))
-        if p.is_file()
-    }
 
 
 def entries(folder: Path) -> list[str]:
@@ -79,7 +71,7 @@ BAD = [
 @pytest.mark.parametrize(("make", "kwargs", "words"), [b[1:] for b in BAD], ids=[b[0] for b in BAD])
 def test_bad_input_is_one_line_and_writes_nothing(tmp_path, make, kwargs, words) -> None:
     out = make(tmp_path)
-    before = tree(tmp_path)
+    before = file_tree(tmp_path)
     names = entries(tmp_path)
     with pytest.raises(FlicInputError) as err:
         write_sample(out, frames=kwargs.pop("frames", 2), **kwargs)
@@ -87,7 +79,7 @@ def test_bad_input_is_one_line_and_writes_nothing(tmp_path, make, kwargs, words)
     assert "\n" not in message
     for word in words:
         assert word in message
-    assert entries(tmp_path) == names and tree(tmp_path) == before
+    assert entries(tmp_path) == names and file_tree(tmp_path) == before
 
 
 @pytest.mark.parametrize(
@@ -104,7 +96,7 @@ def test_bad_input_is_one_line_and_writes_nothing(tmp_path, make, kwargs, words)
 )
 def test_flic_sample_bad_input_exits_2_with_one_line(tmp_path, args, make, words) -> None:
     out = make(tmp_path)
-    before = tree(tmp_path)
+    before = file_tree(tmp_path)
     result = runner.invoke(app, ["sample", str(out), "--frames", "1", *args])
     assert result.exit_code == 2, result.output
     lines = result.output.strip().splitlines()
@@ -112,10 +104,11 @@ def test_flic_sample_bad_input_exits_2_with_one_line(tmp_path, args, make, words
     assert all(word in lines[0] for word in words)
     assert "Traceback" not in result.output
     assert result.exception is None or isinstance(result.exception, SystemExit)
-    assert tree(tmp_path) == before
+    assert file_tree(tmp_path) == before
     assert not [p for p in tmp_path.iterdir() if ".tmp-" in p.name]
 
 
+@pytest.mark.slow
 def test_flic_sample_writes_a_sample(tmp_path) -> None:
     result = runner.invoke(app, ["sample", str(tmp_path / "s"), "--frames", "1"])
     assert result.exit_code == 0, result.output
@@ -170,6 +163,7 @@ def _fail_on_second_png(monkeypatch, exc: BaseException) -> None:
     monkeypatch.setattr(sample_writer, "write_png_range", flaky)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     "exc",
     [OSError(errno.ENOSPC, "No space left on device"), KeyboardInterrupt()],
@@ -187,17 +181,19 @@ def test_a_failure_midway_leaves_nothing(tmp_path, monkeypatch, exc) -> None:
     assert entries(tmp_path) == []
 
 
+@pytest.mark.slow
 def test_a_failure_midway_keeps_the_previous_sample(tmp_path, monkeypatch) -> None:
     out = tmp_path / "out"
     write_sample(out, frames=2)
-    before = tree(out)
+    before = file_tree(out)
     _fail_on_second_png(monkeypatch, OSError(errno.ENOSPC, "No space left on device"))
     with pytest.raises(FlicInputError):
         write_sample(out, frames=3, seed=1)
-    assert tree(out) == before
+    assert file_tree(out) == before
     assert entries(tmp_path) == ["out"]
 
 
+@pytest.mark.slow
 def test_a_previous_sample_is_replaced_whole(tmp_path) -> None:
     out = tmp_path / "out"
     write_sample(out, frames=3)
@@ -206,9 +202,11 @@ def test_a_previous_sample_is_replaced_whole(tmp_path) -> None:
     assert entries(seq / "velodyne") == ["000000.bin", "000001.bin"]  # no stale frame 2
     assert entries(out / "moosmann") == ["img.cfg", "scan00000.png", "scan00001.png"]
     assert entries(tmp_path) == ["out"]
-    assert tree(out) == tree(write_sample(tmp_path / "fresh", frames=2, seed=1).kitti_root.parent)
+    fresh = write_sample(tmp_path / "fresh", frames=2, seed=1).kitti_root.parent
+    assert file_tree(out) == file_tree(fresh)
 
 
+@pytest.mark.slow
 def test_an_empty_folder_is_used(tmp_path) -> None:
     out = tmp_path / "empty"
     out.mkdir()
@@ -263,6 +261,7 @@ def test_io_float_formats(tmp_path) -> None:
 # ---------------------------------------------------------------------------------------------
 
 
+@pytest.mark.slow
 def test_ensure_sample_replaces_a_sample_of_other_parameters(tmp_path, monkeypatch) -> None:
     from flic_cli.sample import ensure_sample
 
@@ -275,6 +274,7 @@ def test_ensure_sample_replaces_a_sample_of_other_parameters(tmp_path, monkeypat
     assert entries(tmp_path) == ["cache"]
 
 
+@pytest.mark.slow
 def test_ensure_sample_reuses_a_cache_written_before_the_split(tmp_path, monkeypatch) -> None:
     """A cache holding the same files and marker (as the former single module wrote them)."""
     from flic_cli.sample import ensure_sample
@@ -298,6 +298,7 @@ def test_ensure_sample_refuses_a_folder_of_other_files(tmp_path, monkeypatch) ->
     assert entries(tmp_path) == ["mine.txt"]
 
 
+@pytest.mark.slow
 def test_a_link_to_a_folder_receives_the_sample(tmp_path) -> None:
     real = tmp_path / "real"
     real.mkdir()

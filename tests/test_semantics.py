@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from oracles import lab
 
 from flic_cli.classes import THING_CLASSES
 from flic_cli.errors import FlicInputError
@@ -20,10 +21,6 @@ from flic_cli.semantics import MODES, cluster_mask, combine, oracle_semantics
 
 CAR, PERSON, ROAD, BUILDING, MOVING_CAR = 10, 30, 40, 50, 252
 L_CAR = 1
-
-
-def lab(semantic: int, instance: int = 0) -> int:
-    return (instance << 16) | semantic
 
 
 def test_modes_and_oracle() -> None:
