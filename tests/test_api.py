@@ -16,6 +16,7 @@ from flic_cli.io import open_dataset, read_predictions
 README = Path(__file__).resolve().parents[1] / "README.md"
 
 
+@pytest.mark.slow
 def test_segment_points_equals_flic_segment(small_sample, tmp_path):
     with pytest.raises(SystemExit):
         main(
@@ -55,6 +56,7 @@ def test_segment_points_options(small_sample):
     assert "flic14n" in flic.methods()
 
 
+@pytest.mark.slow
 def test_segment_range_image_equals_the_moosmann_prediction(small_sample, tmp_path):
     from flic_cli.io.moosmann import label_image_path, read_label_image
 
@@ -72,6 +74,7 @@ def test_segment_range_image_equals_the_moosmann_prediction(small_sample, tmp_pa
     np.testing.assert_array_equal(got, expected)
 
 
+@pytest.mark.slow
 def test_readme_example_runs():
     text = README.read_text(encoding="utf-8")
     section = text.split("## Python API", 1)[1]

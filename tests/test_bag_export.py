@@ -82,6 +82,7 @@ def exported(tmp_path_factory):
     return out, result.output
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("storage,read", [("mcap", _read_mcap), ("bag", _read_db3)])
 def test_export_round_trips_every_point(shared_data, exported, storage, read):
     out, _ = exported
@@ -105,6 +106,7 @@ def test_export_round_trips_every_point(shared_data, exported, storage, read):
         assert msg.header.frame_id == "velodyne"
 
 
+@pytest.mark.slow
 def test_export_reports_latency(exported):
     _, output = exported
     assert "latency per revolution" in output and "p99" in output and "10 Hz" in output

@@ -31,6 +31,7 @@ def _peak_kb(bag, out) -> int:
     return int(kb)
 
 
+@pytest.mark.slow
 def test_peak_memory_does_not_grow_with_the_bag(shared_data, tmp_path):
     short = bagtools.cycled_vlp16_bag(shared_data, tmp_path / "short", 20)
     long = bagtools.cycled_vlp16_bag(shared_data, tmp_path / "long", 300)

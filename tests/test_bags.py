@@ -65,6 +65,7 @@ def test_cloud_array_rejects_short_data():
 # ---- ring_image: against a brute-force nearest-point image ------------------------------------
 
 
+@pytest.mark.slow
 def test_ring_image_matches_brute_force():
     rng = np.random.default_rng(3)
     n, rings, width = 3000, 8, 64
@@ -123,6 +124,7 @@ def _cloud_columns(cloud: np.ndarray) -> dict[str, np.ndarray]:
     return {k: cloud[k] for k in ("x", "y", "z", "intensity", "ring", "time")}
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("kind", ["ros1", "sqlite3", "mcap", "plain-mcap", "db3-file"])
 def test_pointcloud2_bag_in_every_storage(shared_data, tmp_path, kind):
     clouds = bagtools.vlp16_clouds(shared_data, 3)
@@ -189,6 +191,7 @@ def test_organised_cloud_without_ring_takes_its_rows(tmp_path):
 # ---- the shared recordings ---------------------------------------------------------------------
 
 
+@pytest.mark.slow
 def test_vlp16_bag_agrees_with_nebula_reference(shared_data):
     """Message 4 of nebula's bag decoded by flic (velodyne-decoder) against nebula's own decoded
     PCD of that message: measured median 5.2 mm, 98.7 % of points within 2 cm (nearest
@@ -220,6 +223,7 @@ def test_vlp16_bag_agrees_with_nebula_reference(shared_data):
     assert np.median(other) > np.median(d_ref)
 
 
+@pytest.mark.slow
 def test_ouster_packet_bag_gives_ouster_sdks_frame(shared_data):
     """The shared OS-0-128 bag: metadata from its own topic, one complete frame (frame id
     1798), 128 x 512, 28,751 valid pixels (ouster-sdk 1.0.1's count, data README)."""
@@ -252,6 +256,7 @@ def test_vlp16_bag_header_and_topics(shared_data):
     assert frame.stamp_ns == 1673400471737763166
 
 
+@pytest.mark.slow
 def test_flic_info_lists_topics_types_counts(shared_data):
     from typer.testing import CliRunner
 
@@ -273,6 +278,7 @@ def test_flic_info_lists_topics_types_counts(shared_data):
     assert "  sensor: Ouster OS-0-128" in lines
 
 
+@pytest.mark.slow
 def test_velodyne_scan_ros1_and_ros2_give_the_same_frames(shared_data, tmp_path):
     """The shared ROS 2 VelodyneScan messages written to a ROS 1 bag: the same frames."""
     from flic_cli.io.bag import open_reader
@@ -295,6 +301,7 @@ def test_velodyne_scan_ros1_and_ros2_give_the_same_frames(shared_data, tmp_path)
         assert a.stamp_ns == b.stamp_ns and a.frame_id == b.frame_id == "velodyne"
 
 
+@pytest.mark.slow
 def test_ouster_ros_pointcloud2_gives_the_pcaps_frame(shared_data, tmp_path):
     """The OS-2-128 pcap's revolution written as ouster-ros's organised 48-byte PointCloud2 (ring
     0 = top): the bag gives the pcap's rows, columns and valid points; 95 % of the pcap's valid

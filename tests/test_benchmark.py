@@ -133,6 +133,7 @@ def _check_outputs(out: Path, n_frames: int, methods: list[str], dbscan_frames: 
     return frames, summary, env
 
 
+@pytest.mark.slow
 def test_benchmark_moosmann_log(small_sample, tmp_path):
     out = tmp_path / "bench"
     result = _bench(small_sample.moosmann_log, out)
@@ -144,6 +145,7 @@ def test_benchmark_moosmann_log(small_sample, tmp_path):
     assert "median_ms" in result.output
 
 
+@pytest.mark.slow
 def test_benchmark_semantickitti(small_sample, tmp_path):
     out = tmp_path / "bench"
     result = _bench(small_sample.kitti_root, out, "--repeat", "2", "--no-plots")
@@ -155,6 +157,7 @@ def test_benchmark_semantickitti(small_sample, tmp_path):
     assert env["format"] == "semantickitti" and env["repeat"] == 2
 
 
+@pytest.mark.slow
 def test_benchmark_frame_selection_and_threads(small_sample, tmp_path):
     out = tmp_path / "bench"
     result = runner.invoke(
@@ -200,6 +203,7 @@ def test_benchmark_bad_input(small_sample, tmp_path, args, message):
     assert "Traceback" not in result.output
 
 
+@pytest.mark.slow
 def test_speedups_on_few_frames_are_marked_as_indications(small_sample, tmp_path):
     from flic_cli.config import load_config
     from flic_cli.runs.benchmark import run_benchmark
@@ -214,6 +218,7 @@ def test_speedups_on_few_frames_are_marked_as_indications(small_sample, tmp_path
     assert "e+" not in text.split("speed-up")[1]  # no exponents in the ratios
 
 
+@pytest.mark.slow
 def test_rounds_keep_each_frames_median(small_sample, tmp_path, monkeypatch):
     """--rounds N: N passes over the selection, each frame's time the median over the passes."""
     from flic_cli.config import load_config

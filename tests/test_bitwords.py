@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from numba import njit
@@ -29,6 +30,7 @@ def _set_bits(words: np.ndarray) -> np.ndarray:
     return out[:n]
 
 
+@pytest.mark.slow
 @settings(max_examples=100, deadline=None)
 @given(st.lists(st.booleans(), min_size=1, max_size=300))
 def test_pack_and_set_bits_equal_numpy(bools: list[bool]) -> None:

@@ -17,6 +17,7 @@ def _segment(*args: str):
     return runner.invoke(app, ["segment", *map(str, args)])
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("method", METHODS)
 def test_segment_writes_a_label_file_per_frame(small_sample, tmp_path, method):
     result = _segment(small_sample.kitti_root, "--method", method, "--out", tmp_path)
@@ -34,6 +35,7 @@ def test_segment_writes_a_label_file_per_frame(small_sample, tmp_path, method):
         assert pred.max() >= 5  # the street has cars, walls and trees
 
 
+@pytest.mark.slow
 def test_mc_option_selects_the_preset(small_sample, tmp_path):
     a = _segment(small_sample.kitti_root, "--method", "flic", "--mc", "14", "--out", tmp_path / "a")
     b = _segment(small_sample.kitti_root, "--method", "flic14", "--out", tmp_path / "b")
@@ -42,6 +44,7 @@ def test_mc_option_selects_the_preset(small_sample, tmp_path):
     assert np.array_equal(pa, read_predictions(tmp_path / "b", "00", 0))
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("method", METHODS)
 def test_segment_moosmann_log(small_sample, tmp_path, method):
     """Moosmann predictions are 16-bit label images named after their range images, holding
@@ -69,6 +72,7 @@ def test_segment_moosmann_log(small_sample, tmp_path, method):
     assert not list(tmp_path.rglob("*.label"))
 
 
+@pytest.mark.slow
 def test_no_ground_setting_drops_ground_classes(small_sample, tmp_path):
     result = _segment(small_sample.kitti_root, "--setting", "no-ground", "--out", tmp_path)
     assert result.exit_code == 0, result.output
@@ -80,6 +84,7 @@ def test_no_ground_setting_drops_ground_classes(small_sample, tmp_path):
     assert pred[ground].max() == 0 and pred[~ground].max() > 0
 
 
+@pytest.mark.slow
 def test_segment_real_frames_with_every_method(kitti_root, tmp_path):
     for method in ["flic0", "flic14", "bogoslavskyi"]:
         result = _segment(
@@ -145,6 +150,7 @@ def test_bad_input_is_one_line_exit_2(small_sample, tmp_path, args, message):
     assert "Traceback" not in result.output
 
 
+@pytest.mark.slow
 def test_spherical_projection_by_config(small_sample, tmp_path):
     cfg = tmp_path / "spherical.toml"
     cfg.write_text('[projection]\nmode = "spherical"\n')
@@ -155,6 +161,7 @@ def test_spherical_projection_by_config(small_sample, tmp_path):
     assert coverage[0] < coverage[1]  # the synthetic scan is in sensor order: rings cover more
 
 
+@pytest.mark.slow
 def test_empty_moosmann_frame_is_segmented_to_nothing(small_sample, tmp_path):
     import shutil
 
@@ -173,6 +180,7 @@ def test_empty_moosmann_frame_is_segmented_to_nothing(small_sample, tmp_path):
     assert image.shape == (64, 870) and not image.any()
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("setting", ["ground", "no-ground"])
 def test_predictions_hold_one_label_per_stored_point_with_nan_points(
     small_sample, tmp_path, setting
@@ -197,6 +205,7 @@ def test_predictions_hold_one_label_per_stored_point_with_nan_points(
     assert np.all(pred[bad] == 0) and pred.max() > 0
 
 
+@pytest.mark.slow
 def test_spherical_fallback_is_named_for_every_frame_and_counted(small_sample, tmp_path, capsys):
     """A scan whose points are not in sensor order cannot give rings: each such frame gets a
     warning naming its file, and the summary counts them."""
@@ -225,6 +234,7 @@ def test_spherical_fallback_is_named_for_every_frame_and_counted(small_sample, t
     assert "2 frame(s) projected spherically" in captured.out
 
 
+@pytest.mark.slow
 def test_semantics_oracle_and_a_network_folder(small_sample, tmp_path):
     """--semantics writes the classes in the lower 16 bits; only thing points are clustered
     (ids in the upper bits); stuff points carry instance 0; a network's folder is read."""
@@ -253,6 +263,7 @@ def test_semantics_oracle_and_a_network_folder(small_sample, tmp_path):
     assert cars.any() and np.all(pred[cars] == 50)
 
 
+@pytest.mark.slow
 def test_export_ply(small_sample, tmp_path):
     from plyfile import PlyData
 

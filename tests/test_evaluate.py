@@ -64,6 +64,7 @@ def _assert_same_tables(a: Path, b: Path) -> None:
         pd.testing.assert_frame_equal(da, db, check_exact=True, obj=name)
 
 
+@pytest.mark.slow
 def test_outputs_and_columns(reference: Path) -> None:
     for name in [*TABLES, "run.json"]:
         assert (reference / name).is_file(), name
@@ -95,6 +96,7 @@ def _scores(ious: np.ndarray) -> dict[str, float]:
     return out
 
 
+@pytest.mark.slow
 def test_tables_recompute_from_per_object(reference: Path) -> None:
     objects = _read(reference / "per_object.csv")
     frames = _read(reference / "per_frame.csv")
@@ -147,12 +149,14 @@ def test_tables_recompute_from_per_object(reference: Path) -> None:
     assert objects["iou"].between(0, 1).all()
 
 
+@pytest.mark.slow
 def test_jobs_2_equals_serial(reference: Path, sample_root: Path, tmp_path: Path) -> None:
     result = _evaluate(sample_root, tmp_path / "j2", "--jobs", "2")
     assert result.exit_code == 0, result.output
     _assert_same_tables(reference, tmp_path / "j2")
 
 
+@pytest.mark.slow
 def test_dask_local_cluster_equals_serial(
     reference: Path, sample_root: Path, tmp_path: Path
 ) -> None:
@@ -180,6 +184,7 @@ def test_scheduler_without_dask(
     assert "pip install" in result.output and "Traceback" not in result.output
 
 
+@pytest.mark.slow
 def test_resume_after_interruption(reference: Path, sample_root: Path, tmp_path: Path) -> None:
     out = tmp_path / "resumed"
     shutil.copytree(reference, out)
@@ -212,6 +217,7 @@ def test_resume_after_interruption(reference: Path, sample_root: Path, tmp_path:
     )
 
 
+@pytest.mark.slow
 def test_resume_of_finished_run_rewrites_tables(reference: Path, sample_root: Path, tmp_path):
     out = tmp_path / "done"
     shutil.copytree(reference, out)
@@ -236,6 +242,7 @@ def test_missing_label_is_named(partly_labelled: Path, tmp_path: Path) -> None:
     assert "Traceback" not in result.output
 
 
+@pytest.mark.slow
 def test_skip_missing(partly_labelled: Path, reference: Path, tmp_path: Path) -> None:
     out = tmp_path / "skip"
     result = _evaluate(partly_labelled, out, "--skip-missing", "--setting", "no-ground")
@@ -257,6 +264,7 @@ def test_unlabelled_data_is_refused(tmp_path: Path) -> None:
     assert "labels" in result.output
 
 
+@pytest.mark.slow
 def test_corrupt_frame_in_worker(sample_root: Path, tmp_path: Path) -> None:
     root = tmp_path / "kitti"
     shutil.copytree(sample_root, root)
@@ -284,6 +292,7 @@ def _square(x: int) -> int:
     return x * x
 
 
+@pytest.mark.slow
 def test_imap_frames() -> None:
     assert list(imap_frames(_square, range(5), jobs=1)) == [0, 1, 4, 9, 16]
     assert sorted(imap_frames(_square, range(7), jobs=2)) == [x * x for x in range(7)]
@@ -295,6 +304,7 @@ def test_imap_frames_without_dask(monkeypatch: pytest.MonkeyPatch) -> None:
         list(imap_frames(_square, range(2), scheduler="tcp://127.0.0.1:1"))
 
 
+@pytest.mark.slow
 def test_real_data_sequence_00_frame_0(kitti_root: Path, tmp_path: Path) -> None:
     result = runner.invoke(
         app,
@@ -320,6 +330,7 @@ def test_real_data_sequence_00_frame_0(kitti_root: Path, tmp_path: Path) -> None
     assert 0 < table["iou_mu_no_ground"].iloc[0] <= 100
 
 
+@pytest.mark.slow
 def test_imap_frames_dask_window() -> None:
     distributed = pytest.importorskip("distributed", reason="dask.distributed not installed")
     with distributed.LocalCluster(
@@ -334,6 +345,7 @@ def test_imap_frames_dask_window() -> None:
     assert sorted(got) == [x * x for x in range(25)]
 
 
+@pytest.mark.slow
 def test_dask_cluster_started_from_the_command_line(
     reference: Path, sample_root: Path, tmp_path: Path
 ) -> None:
@@ -423,6 +435,7 @@ def test_estimate_line_counts_a_shared_ground_extraction_once() -> None:
     assert "reading, projection and scoring 950 ms) x 10 frames = 10 s of one worker" in line
 
 
+@pytest.mark.slow
 def test_table_intervals_hold_the_estimates(reference: Path) -> None:
     table = _read(reference / "table.csv")
     for col in ("iou_mu_no_ground", "iou_mu_ground", "p_mu"):
@@ -432,6 +445,7 @@ def test_table_intervals_hold_the_estimates(reference: Path) -> None:
         assert (table[f"{col}_low"] < table[f"{col}_high"]).all()  # 3 frames: not degenerate
 
 
+@pytest.mark.slow
 def test_quality_speed_from_a_benchmark(reference: Path, sample_root: Path, tmp_path: Path) -> None:
     qs = _read(reference / "quality_speed.csv")
     table = _read(reference / "table.csv")
@@ -452,6 +466,7 @@ def test_quality_speed_from_a_benchmark(reference: Path, sample_root: Path, tmp_
     assert qs.loc["flic14", "timing"].startswith("flic evaluate")  # not in the benchmark
 
 
+@pytest.mark.slow
 def test_oracle_panoptic_equals_scoring_what_segment_writes(
     sample_root: Path, tmp_path: Path
 ) -> None:
@@ -496,6 +511,7 @@ def test_oracle_panoptic_equals_scoring_what_segment_writes(
     assert oracle.loc["person", "tp"] > 0  # the sample has people, and they are scored
 
 
+@pytest.mark.slow
 def test_ground_csv_pools_each_removers_counts(sample_root: Path, tmp_path: Path) -> None:
     """ground.csv: per remover of the ground setting, the counts of its mask against the
     ground classes, pooled over frames (recomputed here frame by frame)."""

@@ -34,6 +34,7 @@ from flic_cli.io.base import Frame, FrameRef, in_frames
 from flic_cli.methods.base import drop_small
 
 runner = CliRunner()
+pytestmark = pytest.mark.slow  # every test runs flic commands end to end on the toy format
 
 SUFFIX = ".toy"
 

@@ -347,6 +347,7 @@ def _reference(image: RangeImage, **kw) -> np.ndarray:
 SETTINGS = [{}, {"base_band_m": 0.1, "kerb_m": 0.1, "noise_m": 0.05}, {"max_step_m": 0.6}]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("kw", SETTINGS)
 def test_kernel_equals_the_previous_implementation_on_synthetic_streets(kw):
     scenes = [_scene(STREET), _scene(STREET, _car(20.0, -1.5, -H_S, 1))]
@@ -357,6 +358,7 @@ def test_kernel_equals_the_previous_implementation_on_synthetic_streets(kw):
         assert np.array_equal(column_ground(image, neighbour_px=0, **kw), _reference(image, **kw))
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("kw", SETTINGS[:2])
 def test_kernel_equals_the_previous_implementation_on_the_shared_frames(kitti_root, kw):
     from flic_cli.config import load_config
@@ -469,6 +471,7 @@ def _kw6(kw):
     return {names.get(k, k): v for k, v in kw.items()}
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("kw", STEP6)
 def test_step_6_equals_the_plain_reference_on_synthetic_streets(kw):
     zg = -H_S + STREET.kerb_height
@@ -479,6 +482,7 @@ def test_step_6_equals_the_plain_reference_on_synthetic_streets(kw):
         assert np.array_equal(column_ground(image, **_kw6(kw)), _reference_full(image, **kw))
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("kw", STEP6[:2])
 def test_step_6_equals_the_plain_reference_on_the_shared_frames(kitti_root, kw):
     from flic_cli.config import load_config
@@ -695,6 +699,7 @@ def _check_step_7(image: RangeImage, points: np.ndarray, mask: np.ndarray) -> No
     assert np.array_equal(clustered.point_counts(), want.point_counts())
 
 
+@pytest.mark.slow
 def test_step_7_equals_the_plain_reference_on_the_shared_frames(kitti_root):
     from flic_cli.config import load_config
     from flic_cli.runs.pipeline import prepare
@@ -959,6 +964,7 @@ def test_held_points_count_towards_the_minimum_size_and_link_nothing(kind):
     assert got[2] == 0 and got[3] == got[4] and len({got[0], got[1], got[3]}) == 3
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     "name", ["bogoslavskyi", "flic0", "flic14n", "flic0-scipy", "bridge", "dbscan"]
 )

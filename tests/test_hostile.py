@@ -446,6 +446,7 @@ def test_out_in_use_by_another_run_is_refused(data: Data, command, capsys) -> No
     assert (data.out / "table.csv").read_text() == "of the other run\n"
 
 
+@pytest.mark.slow
 def test_lock_is_released_when_its_holder_is_killed(tmp_path: Path) -> None:
     from flic_cli.io.atomic import locked_folder
 

@@ -295,6 +295,7 @@ def reference_read_scan(bin_path: Path, label_path: Path | None) -> tuple:
 SPECIAL = [np.nan, np.inf, -np.inf, 0.0, -0.0, 1e38, -1e-40]  # (-1e-40 is a float32 subnormal)
 
 
+@pytest.mark.slow
 @settings(max_examples=100, deadline=None)
 @given(
     st.integers(1, 300).flatmap(

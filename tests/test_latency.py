@@ -22,6 +22,7 @@ def test_summary_line_leaves_the_first_frame_out_and_judges_p99():
     assert "p99 59.4 ms" in slow and "10 Hz (100 ms): yes, 20 Hz (50 ms): no" in slow
 
 
+@pytest.mark.slow
 def test_benchmark_on_a_bag_writes_the_latency_per_revolution(shared_data, tmp_path):
     pytest.importorskip("rosbags")
     from flic_cli.runs.benchmark import run_benchmark

@@ -384,6 +384,7 @@ def test_segment_gives_the_labels_of_the_previous_kernel_on_the_sample(small_sam
         assert _same_labels_as_before(data, REFERENCE_METHODS, settings_) > 0
 
 
+@pytest.mark.slow
 def test_segment_gives_the_labels_of_the_previous_kernel_on_the_shared_frames(kitti_root):
     methods = ("bogoslavskyi", "flic0", "flic1", "flic14", "bridge")
     settings_ = [("ground", "paper"), ("ground", "own"), ("no-ground", "paper")]

@@ -390,6 +390,7 @@ frames = st.integers(min_value=1, max_value=80).flatmap(
 )
 
 
+@pytest.mark.slow
 @settings(max_examples=300, deadline=None)
 @given(frames)
 def test_matches_loop_reference(case: tuple[list[int], list[int], int, int]) -> None:
@@ -416,6 +417,7 @@ def test_matches_loop_reference(case: tuple[list[int], list[int], int, int]) -> 
     assert stats["clusters"] == len(set(pred[pred > 0].tolist()))
 
 
+@pytest.mark.slow
 @settings(max_examples=200, deadline=None)
 @given(frames, st.data())
 def test_perfect_segmentation_scores_one(
@@ -455,6 +457,7 @@ def reference_under_segmented(
     )
 
 
+@pytest.mark.slow
 @settings(max_examples=300, deadline=None)
 @given(frames, st.sampled_from(["int64", "int32", "uint16", "bool", "big", "negative"]), st.data())
 def test_score_frame_equals_the_loop_reference(

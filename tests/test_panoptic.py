@@ -252,6 +252,7 @@ def reference_counts(pc, ps, gc, gs, n_classes, min_points):
     return tp, fp, fn, iou_sum
 
 
+@pytest.mark.slow
 @settings(max_examples=150, deadline=None)
 @given(
     st.integers(1, 80).flatmap(
@@ -318,6 +319,7 @@ def test_agnostic_counts_ignore_negative_ids_and_count_large_clusters_as_fp() ->
         agnostic_scores(panoptic_counts(gt, gt))
 
 
+@pytest.mark.slow
 @settings(max_examples=300, deadline=None)
 @given(data=st.data())
 def test_fast_agnostic_counts_equal_the_definition(data) -> None:

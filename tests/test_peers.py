@@ -294,6 +294,7 @@ def test_evaluate_runs_every_new_method_with_oracle_semantics(
     assert table.set_index("method").loc["slr", "ose"] == pytest.approx(sel["ose"].mean(), abs=1e-4)
 
 
+@pytest.mark.slow
 def test_segment_needs_semantics_for_alpine(sample_root, tmp_path) -> None:  # noqa: ANN001
     from typer.testing import CliRunner
 

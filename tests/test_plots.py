@@ -71,6 +71,7 @@ def test_object_marks_on_a_hand_built_scene() -> None:
     assert m.merged.tolist() == [4]
 
 
+@pytest.mark.slow
 def test_frame_views_with_and_without_labels(tmp_path) -> None:
     pts, gt, pred = scene()
     ground = gt == lab(ROAD)
@@ -104,6 +105,7 @@ def test_object_marks_agree_with_segmentation_stats(runs) -> None:
     assert set(m.missed.tolist()) == set(m.matches.label[m.matches.iou == 0].tolist())
 
 
+@pytest.mark.slow
 def test_range_image_render_has_a_legend_that_matches(tmp_path) -> None:
     pts, gt, pred = scene()
     image = project_points(pts, width=256, mode="spherical")
@@ -115,6 +117,7 @@ def test_range_image_render_has_a_legend_that_matches(tmp_path) -> None:
     assert_png(tmp_path / "s" / "range.png")
 
 
+@pytest.mark.slow
 def test_benchmark_pictures(tmp_path) -> None:
     rng = np.random.default_rng(1)
     hz = {"flic0": 600 + 50 * rng.standard_normal(30), "dbscan": 2 + rng.random(4)}
@@ -130,6 +133,7 @@ def test_benchmark_pictures(tmp_path) -> None:
     assert assert_png(tmp_path / "h3" / "hist.png")[1] > h  # one panel per method
 
 
+@pytest.mark.slow
 def test_quality_speed(tmp_path) -> None:
     names = ["flic0", "flic14", "dbscan"]
     ms = np.array([1.0, 1.6, 450.0])

@@ -211,6 +211,7 @@ def assert_nearest_heights(img, points, keep=None):
     assert not got[img.ranges.reshape(-1) == 0][check[img.ranges.reshape(-1) == 0]].any()
 
 
+@pytest.mark.slow
 def test_projection_equals_the_reference_on_every_shared_frame(kitti_root):
     ds = open_dataset(kitti_root)
     from flic_cli.classes import ground_mask
@@ -248,6 +249,7 @@ def synthetic_scan(
     return np.concatenate(pts).astype(dtype)
 
 
+@pytest.mark.slow
 @settings(max_examples=100, deadline=None)
 @given(
     seed=st.integers(0, 2**32 - 1),

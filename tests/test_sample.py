@@ -41,6 +41,7 @@ def test_pitch_table() -> None:
     assert np.diff(p[32:]).mean() == pytest.approx(0.5, abs=0.03)
 
 
+@pytest.mark.slow
 def test_deterministic(tmp_path: Path, written: sample.SamplePaths) -> None:
     again = sample.write_sample(tmp_path, frames=FRAMES, seed=0)
     root_a = written.kitti_root.parent
@@ -237,6 +238,7 @@ def test_moosmann_frames_look_like_real_logs(written: sample.SamplePaths) -> Non
     assert 2000 <= valid - non_ground <= 8000
 
 
+@pytest.mark.slow
 def test_ensure_sample(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     target = tmp_path / "cache" / "sample"
     monkeypatch.setenv("FLIC_SAMPLE_DIR", str(target))

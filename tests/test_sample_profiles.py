@@ -80,6 +80,7 @@ def written(request: pytest.FixtureRequest, tmp_path_factory: pytest.TempPathFac
     return name, sample.write_sample(out, frames=2, seed=1, sensor=name)
 
 
+@pytest.mark.slow
 def test_written_layout(written) -> None:
     name, paths = written
     out = paths.kitti_root.parent
@@ -103,6 +104,7 @@ def test_written_layout(written) -> None:
     assert paths.sensor == name and paths.kitti_width == EXPECTED[name][1]
 
 
+@pytest.mark.slow
 def test_round_trip_through_the_reader(written) -> None:
     """Reader + the sample's own ``--config``: rows = beams, width = columns, ring recovery, the
     rows at the table's elevations, one pixel per point at the cast's range, and every point's
@@ -140,6 +142,7 @@ def test_round_trip_through_the_reader(written) -> None:
         assert len(np.unique(instance(frame.labels))) > 10  # the street's objects are there
 
 
+@pytest.mark.slow
 def test_sensor_toml_is_a_config(written) -> None:
     name, paths = written
     if paths.config is None:

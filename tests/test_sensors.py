@@ -286,6 +286,7 @@ def test_nuscenes_sweep(shared_data: Path) -> None:
     assert np.count_nonzero(frame.image.ranges) == frame.points.shape[0]  # one point per pixel
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("path", [OS2 + ".pcap", OS1_PCAP, VLP16, HELIOS, NEBULA_PCD, NUSCENES])
 def test_info_on_every_recording(
     shared_data: Path, path: str, capsys: pytest.CaptureFixture[str]
@@ -305,6 +306,7 @@ def test_info_on_every_recording(
     assert f"beam angles from: {expect[2]}" in out and "projection coverage" in out
 
 
+@pytest.mark.slow
 def test_segment_writes_one_label_per_point(
     shared_data: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
@@ -375,6 +377,7 @@ def test_pcd_without_ring_estimates_the_beams(tmp_path: Path) -> None:
 # ---------------------------------------------------------------------------------------------
 
 
+@pytest.mark.slow
 def test_nuscenes_evaluate_scores_a_label_file(
     shared_data: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
@@ -562,6 +565,7 @@ def _sdk_python() -> str:
     pytest.skip("ouster-sdk is not installed (set FLIC_OUSTER_SDK_PYTHON to a venv's python)")
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     ("pcap", "meta"),
     [(OS2 + ".pcap", OS2 + ".json"), (OS1_PCAP, "ouster/OS-1-64_sensor_config_reduced.json")],
@@ -803,6 +807,7 @@ def test_organised_pcd_keeps_its_rows_and_columns(tmp_path: Path) -> None:
     np.testing.assert_array_equal(frame.image.point_pixel, expect[~gone])
 
 
+@pytest.mark.slow
 def test_osf_frames_equal_the_pcap_frames(shared_data: Path, tmp_path: Path) -> None:
     """An OSF written by ouster-sdk from the OS-2-128 pcap (where ouster-sdk is installed in
     flic's environment) reads to the same image and points as the pcap."""

@@ -51,6 +51,7 @@ COMMANDS = {
 }
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("command", COMMANDS)
 def test_stop_or_skip(command, broken, tmp_path, capsys) -> None:
     kitti, log = broken
@@ -70,6 +71,7 @@ def test_stop_or_skip(command, broken, tmp_path, capsys) -> None:
     assert "skipped 1 bad frame" in out + err
 
 
+@pytest.mark.slow
 def test_worker_warnings_are_one_line_each(small_sample, tmp_path, capsys) -> None:
     kitti = tmp_path / "kitti"
     shutil.copytree(small_sample.kitti_root, kitti)

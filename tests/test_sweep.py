@@ -35,6 +35,7 @@ def _evaluate_at(
     return pd.read_csv(out / "per_setting.csv").iloc[0]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("setting", ["no-ground", "ground"])
 def test_flic_sweep_equals_evaluate(sample_root: Path, tmp_path: Path, setting: str) -> None:
     out = tmp_path / "sweep"
@@ -67,6 +68,7 @@ def test_flic_sweep_equals_evaluate(sample_root: Path, tmp_path: Path, setting: 
         assert row[key] == pytest.approx(ev[key], abs=1e-9), key
 
 
+@pytest.mark.slow
 def test_bogoslavskyi_and_dbscan_parameters(sample_root: Path, tmp_path: Path) -> None:
     out = tmp_path / "b"
     result = _sweep(

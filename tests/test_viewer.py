@@ -51,6 +51,7 @@ def _count(pixels: np.ndarray, colour: np.ndarray) -> int:
     return int(np.count_nonzero((np.abs(pixels - colour) <= 1).all(axis=2)))
 
 
+@pytest.mark.slow
 def test_screenshot_colours_match_prediction_and_ground_truth(small_sample, tmp_path):
     viewer = _viewer(small_sample.kitti_root, ["flic14"], (0, 1))
     vf = viewer.screenshot(tmp_path / "shot.png")
@@ -81,6 +82,7 @@ def _palette_rows(rgb: np.ndarray) -> np.ndarray:
     return np.floor(rgb * 255 + 1e-6).astype(np.int64)
 
 
+@pytest.mark.slow
 def test_screenshot_switches_method_and_frame(small_sample, tmp_path):
     viewer = _viewer(small_sample.kitti_root, ["flic14", "bogoslavskyi"], (0, 2))
     a = viewer.screenshot(tmp_path / "a.png")
@@ -91,6 +93,7 @@ def test_screenshot_switches_method_and_frame(small_sample, tmp_path):
     assert not np.array_equal(_pixels(tmp_path / "a.png"), _pixels(tmp_path / "b.png"))
 
 
+@pytest.mark.slow
 def test_screenshot_of_a_bag_without_labels(shared_data, tmp_path):
     viewer = _viewer(shared_data / NEBULA, ["flic14"], (3, 4))
     vf = viewer.screenshot(tmp_path / "bag.png")
@@ -100,6 +103,7 @@ def test_screenshot_of_a_bag_without_labels(shared_data, tmp_path):
     assert np.count_nonzero(px.sum(axis=2)) > 2000
 
 
+@pytest.mark.slow
 def test_view_cli_screenshot(small_sample, tmp_path):
     _viewer(small_sample.kitti_root, ["flic14"], (0, 1))  # skips where EGL cannot start
     out = tmp_path / "cli.png"
