@@ -128,6 +128,18 @@ def test_bogoslavskyi_equals_components_of_atan2_graph(image, angle, min_size, d
     np.testing.assert_array_equal(canonical(got), expected)
 
 
+@settings(max_examples=100, deadline=None)
+@given(image=range_images())
+def test_image_points_are_the_points_from_the_angles(image):
+    # the oracles above build their graphs from xyz_of; flic's own points must be the same
+    from flic_cli.range_image import RangeImage
+
+    ranges, elevation = image
+    img = RangeImage(ranges, elevation, np.zeros(0, np.int64), "native")
+    got = img.to_points().astype(np.float64).reshape(*ranges.shape, 3)
+    np.testing.assert_allclose(got, xyz_of(ranges, elevation), rtol=0, atol=1e-5)
+
+
 def test_bogoslavskyi_beta_is_the_angle_at_the_far_point():
     # d_max = 2, d_min = 1, alpha = 60 deg: the triangle is right-angled at the near point, so the
     # angle at the far point is 30 deg.
