@@ -252,7 +252,6 @@ def reference_counts(pc, ps, gc, gs, n_classes, min_points):
     return tp, fp, fn, iou_sum
 
 
-@pytest.mark.slow
 @settings(max_examples=150, deadline=None)
 @given(
     st.integers(1, 80).flatmap(
