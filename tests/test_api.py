@@ -28,6 +28,7 @@ def test_segment_points_equals_flic_segment(small_sample, tmp_path):
     assert labels.dtype == np.int32 and labels.max() > 10
 
 
+@pytest.mark.slow
 def test_run_takes_a_run_specification(small_sample, tmp_path):
     sel = flic.Selection(small_sample.kitti_root, frames=(1, 2), progress=False)
     summary = flic.run(flic.SegmentRun(sel, tmp_path / "seg", "flic14"))
