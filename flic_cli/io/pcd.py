@@ -237,47 +237,98 @@ def organised_geometry(
     return CloudGeometry(np.asarray(ring, dtype=np.int64), column, width, elevation, model)
 
 
-def read_pcd(path: str | Path) -> np.ndarray:
-    """The points of a PCD file as a structured array (pypcd4); see :func:`read_pcd_shape`.
+def read_pcd(path: str | Path, fields: tuple[str, ...] | None = None) -> np.ndarray:
+    """The points of a PCD file as a structured array; see :func:`read_pcd_shape`."""
+    return read_pcd_shape(path, fields)[0]
+
+
+def read_pcd_shape(
+    path: str | Path, fields: tuple[str, ...] | None = None
+) -> tuple[np.ndarray, int, int]:
+    """``(points, width, height)`` of a PCD file: the structured array and the header's WIDTH
+    and HEIGHT (an organised cloud has HEIGHT > 1: one row per beam).
+
+    pypcd4 parses the header and reads binary and binary_compressed data. An ASCII data section
+    is parsed by pandas' C reader instead (pypcd4 uses ``numpy.loadtxt``, several times
+    slower), and only the ``fields`` asked for are converted.
+
+    Parameters
+    ----------
+    path : the file.
+    fields : the fields needed (of an ASCII section only those are parsed and returned;
+        binary data comes whole); None = all.
 
     Raises
     ------
     FlicInputError
-        When pypcd4 cannot read it or it has no x, y, z fields.
-    """
-    return read_pcd_shape(path)[0]
-
-
-def read_pcd_shape(path: str | Path) -> tuple[np.ndarray, int, int]:
-    """``(points, width, height)`` of a PCD file: the structured array (pypcd4) and the header's
-    WIDTH and HEIGHT (an organised cloud has HEIGHT > 1: one row per beam).
-
-    Raises
-    ------
-    FlicInputError
-        When pypcd4 cannot read it or it has no x, y, z fields.
+        When it cannot be read, holds fewer points than its header says (ASCII), or has no
+        x, y, z fields.
     """
     try:
-        from pypcd4 import PointCloud
+        from pypcd4 import MetaData, PointCloud
     except ImportError:  # pragma: no cover - a core dependency
         raise FlicInputError(path, "reading PCD needs pypcd4 (pip install pypcd4)") from None
     try:
-        cloud = PointCloud.from_path(str(path))
-        data = cloud.pc_data
-        width, height = int(cloud.metadata.width), int(cloud.metadata.height)
-    except Exception as exc:  # noqa: BLE001 - pypcd4 raises many kinds on bad files
+        with open(path, "rb") as fp:
+            meta = MetaData.parse_header(_header_lines(fp))
+            names = meta.build_dtype().names or ()
+            missing = [c for c in "xyz" if c not in names]
+            if missing:
+                raise FlicInputError(
+                    path,
+                    f"has no {'/'.join(missing)} field (fields: {', '.join(names) or 'none'}): "
+                    "a PCD needs x, y and z",
+                )
+            if meta.data.value == "ascii":
+                data = _ascii_data(fp, meta, fields, path)
+            else:
+                fp.seek(0)
+                data = PointCloud.from_fileobj(fp).pc_data
+    except FlicInputError:
+        raise
+    except Exception as exc:  # noqa: BLE001 - pypcd4 and pandas raise many kinds on bad files
         raise FlicInputError(
             path, f"is not a readable PCD file ({type(exc).__name__}: {exc})"
         ) from None
-    names = data.dtype.names or ()
-    missing = [c for c in "xyz" if c not in names]
-    if missing:
+    return data, int(meta.width), int(meta.height)
+
+
+def _header_lines(fp) -> list[str]:  # noqa: ANN001
+    """The header lines of a PCD file, as pypcd4's ``PointCloud.from_fileobj`` collects them
+    (comments and blank lines skipped, up to DATA), leaving ``fp`` at the data section."""
+    lines: list[str] = []
+    for raw in fp:
+        line = raw.decode("utf-8").strip()
+        if line.startswith("#") or not line:
+            continue
+        lines.append(line)
+        if line.startswith("DATA") or len(lines) >= 10:
+            break
+    return lines
+
+
+def _ascii_data(fp, meta, fields: tuple[str, ...] | None, path: object) -> np.ndarray:  # noqa: ANN001
+    """An ASCII data section (one point per line, values separated by spaces) read by pandas'
+    C parser: the requested fields as a structured array of the header's types."""
+    import pandas as pd
+
+    dtype = meta.build_dtype()
+    names = list(dtype.names)
+    wanted = names if fields is None else [n for n in names if n in fields]
+    if meta.points == 0:
+        return np.empty(0, [(n, dtype[n]) for n in wanted])
+    frame = pd.read_csv(
+        fp, sep=r"\s+", header=None, names=names, usecols=wanted, nrows=meta.points,
+        dtype={n: dtype[n] for n in wanted}, engine="c", na_filter=True,
+    )  # fmt: skip
+    if len(frame) != meta.points:
         raise FlicInputError(
-            path,
-            f"has no {'/'.join(missing)} field (fields: {', '.join(names) or 'none'}): a PCD "
-            "needs x, y and z",
+            path, f"holds {len(frame):,} of the {meta.points:,} points its header declares"
         )
-    return data, width, height
+    out = np.empty(len(frame), [(n, dtype[n]) for n in wanted])
+    for n in wanted:
+        out[n] = frame[n].to_numpy()
+    return out
 
 
 def kept_points(xyz: np.ndarray, min_range: float = 0.0) -> np.ndarray:
@@ -326,7 +377,7 @@ class PcdDataset(SensorFileDataset):
 
     def _load(self, info: FileInfo, k: int) -> Frame:
         state: _PcdState = info.state  # type: ignore[assignment]
-        data = read_pcd(info.path)
+        data = read_pcd(info.path, ("x", "y", "z"))
         xyz = np.stack([data["x"], data["y"], data["z"]], axis=1).astype(np.float32)
         if state.keep is not None:
             if state.keep.size != xyz.shape[0]:
