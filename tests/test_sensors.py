@@ -17,6 +17,7 @@ import numpy as np
 import pytest
 
 from flic_cli.cli import main
+from flic_cli.errors import FlicInputError
 from flic_cli.io import open_dataset
 from flic_cli.io.ouster import (
     PROFILES,
@@ -368,6 +369,130 @@ def test_pcd_without_ring_estimates_the_beams(tmp_path: Path) -> None:
     assert frame.image.shape[0] == 16
     assert ds.sensor(ds.refs()[0]).angles_from == "estimated"
     np.testing.assert_array_equal(frame.image.point_pixel // frame.image.shape[1], 15 - ring)
+
+
+def _xyz_only_pcd(path: Path, beams: int = 32, width: int = 256) -> tuple[np.ndarray, int]:
+    """An xyz-only PCD of a sensor whose beams are 0.3 deg apart (closer than the 0.4 deg gap
+    the beam estimate looks for), ``width`` firings of every beam, every 7th point NaN (no
+    return). Returns the true pixel of every stored point (-1 for the NaN ones) and N."""
+    from pypcd4 import PointCloud
+
+    el = np.radians(np.arange(beams) * 0.3 - 5)
+    az = np.pi - (np.arange(width) + 0.5) * 2 * np.pi / width
+    e, a = np.meshgrid(el, az, indexing="ij")
+    r = 8 + 4 * np.sin(3 * a) + 0.05 * np.arange(beams)[:, None]  # smooth walls: clusters form
+    xyz = np.stack([r * np.cos(e) * np.cos(a), r * np.cos(e) * np.sin(a), r * np.sin(e)], -1)
+    xyz = xyz.reshape(-1, 3).astype(np.float32)
+    pixel = ((beams - 1 - np.arange(beams))[:, None] * width + np.arange(width)).reshape(-1)
+    order = np.random.default_rng(3).permutation(xyz.shape[0])  # unorganised, any order
+    xyz, pixel = xyz[order], pixel[order]
+    xyz[::7] = np.nan
+    pixel[::7] = -1
+    PointCloud.from_xyz_points(xyz).save(path)
+    return pixel, xyz.shape[0]
+
+
+def test_pcd_rows_and_columns_options(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """An xyz-only PCD whose beams the elevation gaps cannot separate: without ``--rows`` a
+    one-line error; with ``--rows 32 --columns 512`` every point in its true pixel, and every
+    method of the default config gives one label per stored point (NaN ones included)."""
+    import flic_cli.api as flic
+
+    path = tmp_path / "xyz.pcd"
+    pixel, n = _xyz_only_pcd(path)
+    code, _, err = _cli(["info", path], capsys)
+    assert code == 2 and "no beam structure" in err and len(err.strip().splitlines()) == 1
+    reader = {"rows": 32, "columns": 256}
+    ds = open_dataset(path, reader=reader)
+    model = ds.sensor(ds.refs()[0])
+    assert (model.beams, model.columns, model.columns_from) == (32, 256, "--columns")
+    frame = ds.load(ds.refs()[0])
+    assert frame.image.shape == (32, 256) and frame.n_read == n
+    np.testing.assert_array_equal(frame.image.point_pixel, pixel[pixel >= 0])
+    np.testing.assert_allclose(np.degrees(np.diff(model.elevation)), -0.3, atol=1e-3)
+    # the columns estimate alone (rows given) finds the same 256
+    assert open_dataset(path, reader={"rows": 32}).sensor(ds.refs()[0]).columns == 256
+    frame = flic.load_frame(path, reader=reader)
+    clusters = {}
+    for method in flic.methods():
+        if method in ("alpine", "alpine-k32"):  # per semantic class: a PCD has none
+            with pytest.raises(FlicInputError, match="--semantics"):
+                flic.segment_frame(frame, method)
+            continue
+        labels = flic.segment_frame(frame, method)
+        assert labels.shape == (n,), method
+        assert (labels[pixel < 0] == 0).all(), method  # no return, no cluster
+        clusters[method] = int(np.unique(labels[labels > 0]).size)
+    assert clusters["bogoslavskyi"] >= 1 and clusters["flic14"] >= 1, clusters
+    out = tmp_path / "out"
+    args = ["segment", path, "--rows", "32", "--columns", "256", "--out", out]
+    code, _, err = _cli(args, capsys)
+    assert code == 0, err
+    (pred,) = (out / "sequences" / "xyz" / "predictions").glob("*.label")
+    assert np.fromfile(pred, dtype=np.uint32).size == n
+    code, out_text, _ = _cli(["info", path, "--rows", "32", "--columns", "256"], capsys)
+    assert code == 0 and "32 x 256 (columns from --columns)" in out_text
+
+
+@pytest.mark.parametrize(
+    ("args", "words"),
+    [
+        (["--columns", "4"], "integer >= 8"),
+        (["--rows", "0"], "integer >= 1"),
+        (["--rows", "20000"], "fewer distinct elevations than the 20000 rows"),
+    ],
+)
+def test_pcd_bad_reader_options(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], args: list[str], words: str
+) -> None:
+    path = tmp_path / "xyz.pcd"
+    _xyz_only_pcd(path, beams=4, width=64)
+    code, _, err = _cli(["info", path, *args], capsys)
+    assert code == 2 and words in err and len(err.strip().splitlines()) == 1, err
+
+
+def test_reader_options_on_a_format_without_them(
+    shared_data: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    code, _, err = _cli(["info", shared_data / SENSORS / VLP16, "--columns", "1800"], capsys)
+    assert code == 2 and "does not apply to velodyne data" in err
+    code, _, err = _cli(["info", shared_data / SENSORS / HELIOS, "--rows", "16"], capsys)
+    assert code == 2 and "has a ring field ('channel')" in err
+
+
+def test_ascii_pcd_reads_as_pypcd4_does(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """The ASCII data section through pandas: the same values as pypcd4's own reader (NaN,
+    integer fields, a field of COUNT 2), and a cut-off file is an error, not fewer points."""
+    from pypcd4 import Encoding, MetaData, PointCloud
+
+    from flic_cli.io.pcd import read_pcd
+
+    rng = np.random.default_rng(4)
+    n = 500
+    dtype = [("x", "<f4"), ("y", "<f4"), ("z", "<f4"), ("ring", "<u2"),
+             ("t__0000", "<f8"), ("t__0001", "<f8"), ("i", "i1")]  # fmt: skip
+    data = np.empty(n, dtype)
+    for name, dt in dtype:
+        data[name] = rng.normal(0, 50, n).astype(dt) if "f" in dt else rng.integers(0, 60, n)
+    data["x"][::9] = np.nan
+    meta = MetaData.model_validate(
+        {"fields": ("x", "y", "z", "ring", "t", "i"), "size": (4, 4, 4, 2, 8, 1),
+         "type": ("F", "F", "F", "U", "F", "I"), "count": (1, 1, 1, 1, 2, 1), "points": n,
+         "width": n, "height": 1}
+    )  # fmt: skip
+    path = tmp_path / "a.pcd"
+    PointCloud(meta, data).save(path, encoding=Encoding.ASCII)
+    ours, theirs = read_pcd(path), PointCloud.from_path(path).pc_data
+    assert ours.dtype == theirs.dtype
+    for name in theirs.dtype.names:
+        np.testing.assert_array_equal(ours[name], theirs[name])
+    xyz = read_pcd(path, ("x", "y", "z"))
+    assert xyz.dtype.names == ("x", "y", "z")
+    np.testing.assert_array_equal(xyz["y"], theirs["y"])
+    text = path.read_bytes()
+    (tmp_path / "cut.pcd").write_bytes(text[: len(text) * 2 // 3].rsplit(b"\n", 1)[0] + b"\n")
+    code, _, err = _cli(["info", tmp_path / "cut.pcd"], capsys)
+    assert code == 2 and "of the 500 points its header declares" in err, err
 
 
 # ---------------------------------------------------------------------------------------------

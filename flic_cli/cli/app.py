@@ -137,6 +137,23 @@ TopicOpt = Annotated[
     ),
 ]
 
+ColumnsOpt = Annotated[
+    int | None,
+    typer.Option(
+        "--columns",
+        help="PCD: columns per revolution W (the firings of a turn, e.g. 1800 for 0.2 deg). "
+        "Default: estimated from the median azimuth step between a ring's points.",
+    ),
+]
+RowsOpt = Annotated[
+    int | None,
+    typer.Option(
+        "--rows",
+        help="PCD without a ring field: the sensor's beams (rows). Default: estimated from "
+        "gaps in the points' elevations.",
+    ),
+]
+
 
 def ground_remover_option(default_help: str) -> Any:
     """The ``--ground-remover`` option, listing the registered removers."""

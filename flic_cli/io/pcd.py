@@ -64,10 +64,14 @@ def fit_azimuth(field_rad: np.ndarray, atan_az: np.ndarray) -> tuple[float, floa
 
 def estimate_width(azimuth: np.ndarray, ring: np.ndarray) -> int:
     """Columns per revolution from the median azimuth step (radians) between neighbouring points
-    of a ring (sorted by azimuth, repeated azimuths of dual returns skipped)."""
+    of a ring (sorted by azimuth, repeated azimuths of dual returns skipped).
+
+    The step is the cloud's own point spacing: where a ring returns only every other firing
+    (the Helios-16P recording: steps of 0.1 and 0.2 deg), that gives W for the finer spacing, and
+    row neighbours are then often a column apart; the ``columns`` reader option states W."""
     steps = []
     for r in np.unique(ring):
-        a = np.unique(np.round(np.sort(azimuth[ring == r]), 6))
+        a = np.unique(np.sort(azimuth[ring == r]))
         if a.size > 8:
             d = np.diff(a)
             steps.append(d[d > 1e-6])
@@ -77,17 +81,34 @@ def estimate_width(azimuth: np.ndarray, ring: np.ndarray) -> int:
     return int(np.clip(round(2 * np.pi / step), 8, 65536))
 
 
-def estimate_rings(points: np.ndarray, gap_deg: float = 0.4) -> np.ndarray | None:
+def estimate_rings(
+    points: np.ndarray, gap_deg: float = 0.4, beams: int | None = None
+) -> np.ndarray | None:
     """Ring of every point (0 = lowest) from gaps between its sorted elevations, or None when
     that finds no plausible beam structure (under 2 or over 256 beams, or beams of under 20
-    points on average)."""
+    points on average).
+
+    Parameters
+    ----------
+    points : (N, 3) xyz, metres.
+    gap_deg : a gap wider than this (degrees) between neighbouring elevations starts a beam.
+    beams : the number of beams when known (the ``rows`` reader option): the ``beams - 1``
+        widest gaps separate them then, ``gap_deg`` is not used.
+    """
     xyz = points.astype(np.float64)
     el = np.degrees(np.arctan2(xyz[:, 2], np.hypot(xyz[:, 0], xyz[:, 1])))
     order = np.argsort(el)
-    gaps = np.diff(el[order]) > gap_deg
+    diff = np.diff(el[order])
+    if beams is not None:
+        if beams < 1 or beams > diff.size + 1:
+            return None
+        gaps = np.zeros(diff.size, dtype=bool)
+        gaps[np.argsort(diff, kind="stable")[diff.size - beams + 1 :]] = True
+    else:
+        gaps = diff > gap_deg
     ring_sorted = np.concatenate([[0], np.cumsum(gaps)])
     n = int(ring_sorted[-1]) + 1 if ring_sorted.size else 0
-    if n < 2 or n > 256 or points.shape[0] / n < 20:
+    if beams is None and (n < 2 or n > 256 or points.shape[0] / n < 20):
         return None
     ring = np.empty(points.shape[0], dtype=np.int64)
     ring[order] = ring_sorted
@@ -124,6 +145,8 @@ def cloud_geometry(
     name: str,
     source: str,
     beams: int | None = None,
+    columns: int | None = None,
+    rows: int | None = None,
 ) -> CloudGeometry:
     """Rows, columns and the sensor model of a cloud (see the module docs).
 
@@ -134,19 +157,27 @@ def cloud_geometry(
     azimuth : (N,) azimuth field (any unit, detected) or None (the points' azimuth then).
     name, source : the sensor's name and the file it came from (for the notes).
     beams : the sensor's beam count when known (rings without points then still get a row).
+    columns : columns per revolution W (the ``columns`` reader option); None = estimated from
+        the median azimuth step (:func:`estimate_width`).
+    rows : beams of a cloud without ring field (the ``rows`` reader option); None = estimated
+        from gaps in the elevations (:func:`estimate_rings`).
     """
     xyz = points.astype(np.float64)
     atan_az = np.arctan2(xyz[:, 1], xyz[:, 0])
     notes = []
     if ring is None:
-        est = estimate_rings(points)
+        est = estimate_rings(points, beams=rows)
         if est is None:
             raise FlicInputError(
-                source, "has no ring field, and no beam structure shows in its elevations"
+                source,
+                "has no ring field, and no beam structure shows in its elevations"
+                if rows is None
+                else f"has fewer distinct elevations than the {rows} rows asked for",
             )
         ring_rank, elevation = _rank_rings(points, est)
         angles_from = "estimated"
-        notes.append(f"rows: {elevation.size} beams estimated from gaps in the elevations")
+        how = "the widest gaps" if rows is not None else "gaps"
+        notes.append(f"rows: {elevation.size} beams, split at {how} in the elevations")
     else:
         ring = np.asarray(ring, dtype=np.int64)
         ids = np.unique(ring)
@@ -177,8 +208,8 @@ def cloud_geometry(
     else:
         az = atan_az
         notes.append("columns from the points' azimuth atan2(y, x)")
-    width = estimate_width(az, ring_rank)
-    columns = azimuth_columns(az, width)
+    width = estimate_width(az, ring_rank) if columns is None else int(columns)
+    column = azimuth_columns(az, width)
     h = elevation.size
     model = SensorModel(
         name=name,
@@ -186,10 +217,10 @@ def cloud_geometry(
         azimuth_offset=np.zeros(h),
         columns=width,
         angles_from=angles_from,
-        columns_from="the median azimuth step (estimated)",
+        columns_from="the median azimuth step (estimated)" if columns is None else "--columns",
         notes=tuple(notes),
     )
-    return CloudGeometry(ring_rank, columns, width, elevation, model)
+    return CloudGeometry(ring_rank, column, width, elevation, model)
 
 
 def organised_geometry(
@@ -352,12 +383,19 @@ class PcdDataset(SensorFileDataset):
 
     format = FORMAT
     suffixes = (".pcd",)
+    reader_options = ("columns", "rows")
 
     def _open(self, path: Path) -> FileInfo:
         data, width, height = read_pcd_shape(path)
         xyz = np.stack([data["x"], data["y"], data["z"]], axis=1).astype(np.float32)
         keep = kept_points(xyz)
         if 1 < height <= 1024 and width > 1 and width * height == xyz.shape[0] and keep.any():
+            asked = (self.options.get("rows"), self.options.get("columns"))
+            if asked[0] not in (None, height) or asked[1] not in (None, width):
+                raise FlicInputError(
+                    path, f"is an organised cloud of {height} x {width} (HEIGHT x WIDTH): "
+                    "--rows / --columns cannot change that",
+                )  # fmt: skip
             geo = organised_geometry(xyz[keep], keep, width, height, f"PCD ({path.name})")
             state = _PcdState(None if keep.all() else keep, geo)
             return FileInfo(path, 1, geo.model, np.array([int(keep.sum())]), [], state)
@@ -365,8 +403,14 @@ class PcdDataset(SensorFileDataset):
         ring_name = next((n for n in RING_FIELDS if n in names), None)
         ring = data[ring_name][keep].astype(np.int64) if ring_name else None
         az = data["azimuth"][keep] if "azimuth" in names else None
+        if ring is not None and self.options.get("rows") is not None:
+            raise FlicInputError(
+                path, f"has a ring field ({ring_name!r}): its rows come from it, not --rows"
+            )
         try:
-            geo = cloud_geometry(xyz[keep], ring, az, f"PCD ({path.name})", str(path))
+            geo = cloud_geometry(
+                xyz[keep], ring, az, f"PCD ({path.name})", str(path), **self.options
+            )
         except ValueError as exc:
             raise FlicInputError(path, str(exc)) from None
         if ring_name:
