@@ -71,8 +71,17 @@ def _meta(profile: str, beams: int = 16, columns: int = 64, shift: int = 3) -> O
     return OusterMeta.from_json(js)
 
 
-def _packets(meta: OusterMeta, range_mm: np.ndarray, frame_id: int, dead: int = -1) -> list:
-    """Lidar packets of a staggered (H, W) range image (mm), column ``dead`` marked invalid."""
+def _packets(
+    meta: OusterMeta,
+    range_mm: np.ndarray,
+    frame_id: int,
+    dead: int = -1,
+    range2_mm: np.ndarray | None = None,
+) -> list:
+    """Lidar packets of a staggered (H, W) range image (mm), column ``dead`` marked invalid;
+    a dual-return profile's second return is ``range2_mm`` (default: the first + 1 m), its
+    flag bits set (ouster-sdk's FLAGS, bits 19-23, which a decoder must mask off), reflectivity
+    7 (first) and 5 (second)."""
     head, col_head, chan, foot = PROFILES[meta.profile]
     legacy = meta.profile == "LEGACY"
     out = []
@@ -91,7 +100,13 @@ def _packets(meta: OusterMeta, range_mm: np.ndarray, frame_id: int, dead: int = 
             p = pos + col_head
             for i in range(meta.beams):
                 r = int(range_mm[i, m])
-                if chan == 12:
+                if chan == 16:
+                    r2 = r + 1000 if range2_mm is None else int(range2_mm[i, m])
+                    flags = 0b10101 << 19
+                    struct.pack_into(
+                        "<IIHHH", buf, p, r | flags | 7 << 24, r2 | flags | 5 << 24, 9, 10, 11
+                    )
+                elif chan == 12:
                     struct.pack_into("<IHHH", buf, p, r | (0xABC << 20 if legacy else 0), 7, 9, 11)
                 else:
                     struct.pack_into("<HBB", buf, p, (r // 8) | 0x8000, 7, 9)
@@ -126,6 +141,71 @@ def test_decode_packets_written_from_an_image(profile: str) -> None:
     assert frames[0].complete and frames[0].valid == np.count_nonzero(expect)
     refl = frames[1].fields["reflectivity"]
     assert set(np.unique(refl[img // 2 > 0]).tolist()) <= {7}
+
+
+DUAL = "RNG19_RFL8_SIG16_NIR16_DUAL"
+
+
+def _ouster_json(meta: OusterMeta, profile: str | None = None) -> dict:
+    return {
+        "beam_altitude_angles": meta.altitude_deg.tolist(),
+        "beam_azimuth_angles": meta.azimuth_deg.tolist(),
+        "lidar_mode": f"{meta.columns}x10",
+        "udp_port_lidar": 7502,
+        "data_format": {
+            "pixels_per_column": meta.beams,
+            "columns_per_packet": 16,
+            "columns_per_frame": meta.columns,
+            "pixel_shift_by_row": meta.pixel_shift.tolist(),
+            "column_window": [0, meta.columns - 1],
+            "udp_profile_lidar": profile or meta.profile,
+        },
+    }
+
+
+def test_ouster_dual_return_pcap(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """Dual-return packets written per Ouster's layout (16-byte channels, flag bits set): the
+    first return by default, the second with ``--return 2``, each pixel's range exact, the
+    reflectivity of the return read; ``--return 3`` is a one-line error."""
+    meta = _meta(DUAL)
+    rng = np.random.default_rng(8)
+    first = rng.integers(1, (1 << 19) - 1, (meta.beams, meta.columns)).astype(np.uint32)
+    first[rng.random(first.shape) < 0.1] = 0
+    second = rng.integers(1, (1 << 19) - 1, first.shape).astype(np.uint32)
+    second[rng.random(first.shape) < 0.5] = 0  # most pixels have no second return
+    packets = _packets(meta, first, 3, range2_mm=second)
+    d = tmp_path / "in"
+    d.mkdir()
+    _write_pcap(d / "dual.pcap", packets, 7502)
+    (d / "dual.json").write_text(json.dumps(_ouster_json(meta)))
+    for which, img in ((None, first), (1, first), (2, second)):
+        ds = open_dataset(d / "dual.pcap", reader={"return": which})
+        frame = ds.load(ds.refs()[0])
+        expect = (destagger(img, meta.pixel_shift) * 0.001).astype(np.float32)
+        np.testing.assert_array_equal(frame.image.ranges, expect)
+        assert frame.points.shape[0] == np.count_nonzero(img)
+        note = f"return {which or 1} of 2 read"
+        assert any(note in n for n in ds.sensor(ds.refs()[0]).notes)
+    (frame2,) = decode_frames(packets, meta.with_return(2), fields=("reflectivity", "signal"))
+    np.testing.assert_array_equal(frame2.range_mm, second)
+    assert set(np.unique(frame2.fields["reflectivity"]).tolist()) == {5}
+    assert set(np.unique(frame2.fields["signal"]).tolist()) == {10}
+    code, _, err = _cli(["info", d / "dual.pcap", "--return", "3"], capsys)
+    assert code == 2 and "has 2 returns per pixel: --return 3" in err
+    assert len(err.strip().splitlines()) == 1
+
+
+def test_ouster_profile_flic_cannot_read(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    meta = _meta("RNG19_RFL8_SIG16_NIR16")
+    d = tmp_path / "in"
+    d.mkdir()
+    _write_pcap(d / "fusa.pcap", _packets(meta, np.ones((16, 64), np.uint32), 1), 7502)
+    (d / "fusa.json").write_text(json.dumps(_ouster_json(meta, "FUSA_RNG15_RFL8_NIR8_DUAL")))
+    code, _, err = _cli(["info", d / "fusa.pcap"], capsys)
+    assert code == 2 and len(err.strip().splitlines()) == 1, err
+    assert "'FUSA_RNG15_RFL8_NIR8_DUAL'" in err and DUAL in err
 
 
 def test_destagger_rolls_each_row_by_its_shift() -> None:

@@ -145,6 +145,14 @@ ColumnsOpt = Annotated[
         "Default: estimated from the median azimuth step between a ring's points.",
     ),
 ]
+ReturnOpt = Annotated[
+    int | None,
+    typer.Option(
+        "--return",
+        help="Ouster pcap of a dual-return profile: the return each pixel is read from, 1 "
+        "(the first, default) or 2.",
+    ),
+]
 RowsOpt = Annotated[
     int | None,
     typer.Option(

@@ -12,6 +12,7 @@ from flic_cli.cli.app import (
     ConfigOpt,
     DataArg,
     FramesOpt,
+    ReturnOpt,
     RowsOpt,
     SequencesOpt,
     SettingOpt,
@@ -103,6 +104,7 @@ def benchmark(
     topic: TopicOpt = None,
     columns: ColumnsOpt = None,
     rows: RowsOpt = None,
+    return_index: ReturnOpt = None,
 ) -> None:
     """Time the segmentation of every frame (range image in, labels out, ground extraction
     included), single-threaded, after a warm-up, each method in a pass over the frames of its
@@ -127,7 +129,7 @@ def benchmark(
     sel = Selection(
         _data_or_sample(data, moosmann=True), seqs, frm, setting=setting,
         ground_remover=ground_remover, config=cfg, skip_bad=skip_bad,
-        reader={"columns": columns, "rows": rows},
+        reader={"columns": columns, "rows": rows, "return": return_index},
     )  # fmt: skip
     result = run_benchmark(
         BenchmarkRun(sel, out, names, warmup, repeat, rounds, slow_every, threads, plots)

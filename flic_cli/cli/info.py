@@ -10,6 +10,7 @@ from flic_cli.cli.app import (
     ColumnsOpt,
     DataArg,
     FramesOpt,
+    ReturnOpt,
     RowsOpt,
     SequencesOpt,
     TopicOpt,
@@ -48,6 +49,7 @@ def info(
     topic: TopicOpt = None,
     columns: ColumnsOpt = None,
     rows: RowsOpt = None,
+    return_index: ReturnOpt = None,
 ) -> None:
     """Show the format, sensor, frames, image size, points and coverage of DATA."""
     from flic_cli.cli.app import _data_or_sample
@@ -62,7 +64,7 @@ def info(
             typer.echo(line)
         if not chosen:
             return
-    reader = {"columns": columns, "rows": rows}
+    reader = {"columns": columns, "rows": rows, "return": return_index}
     for line in describe(path, seqs, frame_range, sample, reader):
         typer.echo(line)
 

@@ -15,6 +15,7 @@ from flic_cli.cli.app import (
     JobsOpt,
     McOpt,
     MethodOpt,
+    ReturnOpt,
     RowsOpt,
     SequencesOpt,
     SettingOpt,
@@ -90,6 +91,7 @@ def segment(
     topic: TopicOpt = None,
     columns: ColumnsOpt = None,
     rows: RowsOpt = None,
+    return_index: ReturnOpt = None,
 ) -> None:
     """Segment scans and write predictions: for SemanticKITTI `.label` files (cluster id in the
     upper 16 bits, 0 = unclustered, the semantic class in the lower 16; one label per point of
@@ -105,7 +107,7 @@ def segment(
     sel = Selection(
         _data_or_sample(data), seqs, frm, setting=setting, ground_remover=ground_remover,
         config=load_config(config), jobs=jobs, skip_bad=skip_bad,
-        reader={"columns": columns, "rows": rows},
+        reader={"columns": columns, "rows": rows, "return": return_index},
     )  # fmt: skip
     summary = run_segment(
         SegmentRun(sel, out, resolve_method(method, mc), render, semantics, tuple(export or ()))

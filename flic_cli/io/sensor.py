@@ -79,6 +79,7 @@ class SensorModel:
 READER_OPTIONS = {
     "columns": "columns per revolution W of a cloud without firing index (PCD)",
     "rows": "beams of a cloud without ring field (PCD)",
+    "return": "the return read of a dual-return profile, 1 or 2 (Ouster pcap)",
 }
 
 
