@@ -103,7 +103,7 @@ def load_frame(
     data: str | Path,
     frame: int = 0,
     sequence: str | None = None,
-    reader: dict[str, int | None] | None = None,
+    reader: dict[str, object] | None = None,
 ) -> Frame:
     """Load one frame of a dataset (SemanticKITTI or a Moosmann log).
 

@@ -939,47 +939,99 @@ def test_ouster_image_azimuths_match_the_points(shared_data: Path) -> None:
     assert np.percentile(d, 99) < 0.1 * step and d.max() < 0.5 * step
 
 
-@pytest.mark.parametrize(("factory", "beams", "name"), [(0x21, 32, "HDL32E"), (0x28, 32, "VLP32C")])
-def test_velodyne_32_beam_models_from_written_packets(
-    tmp_path: Path, factory: int, beams: int, name: str
-) -> None:
-    """HDL-32E / VLP-32C packets written here (one firing of 32 lasers per block, 10 m for
-    every laser): velodyne-decoder's model from the factory byte, 32 rows ordered top to bottom
-    whatever the laser order, every return in its own pixel."""
-    step = 16  # azimuth step per firing, 0.01 deg
-    packets = []
-    az = 0
-    for k in range(int(2.3 * 36000 / step / 12)):
-        buf = bytearray()
-        for _ in range(12):
-            buf += b"\xff\xee" + struct.pack("<H", az % 36000)
-            buf += struct.pack("<HB", 5000, 100) * 32  # 5000 x 2 mm
-            az += step
-        buf += struct.pack("<IBB", 1000 * k, 0x37, factory)
-        packets.append(bytes(buf))
+def _velodyne_capture(tmp_path: Path, model: str) -> tuple[Path, np.ndarray, np.ndarray]:
+    """A pcap of 2.3 turns of ``model``'s packets (tests/velodyne_packets.py) from known
+    ranges: unique per firing and laser, 10 % without return. Returns the pcap, the ranges
+    (F, lasers) and the firings' azimuths (0.01 deg)."""
+    from velodyne_packets import MODELS, write_packets
+
+    lasers, _, _, res = MODELS[model]
+    step = 40  # 0.4 deg per firing: 900 firings per turn
+    firings = int(2.3 * 36000 / step)
+    rng = np.random.default_rng(lasers)
+    ranges = (np.rint(rng.uniform(1.0, 60.0, (firings, lasers)) / res) * res).astype(np.float64)
+    ranges[rng.random(ranges.shape) < 0.1] = 0.0
+    azimuth = np.arange(firings) * step + 1234
     d = tmp_path / "in"
-    d.mkdir()
-    _write_pcap(d / "v32.pcap", packets, 2368)
-    ds = open_dataset(d / "v32.pcap")
-    assert ds.format == "velodyne" and len(ds.refs()) >= 1
-    model = ds.sensor(ds.refs()[0])
-    assert model.name == f"Velodyne {name}" and model.beams == beams
-    assert np.all(np.diff(model.elevation) < 0)  # row 0 = top
-    frame = ds.load(ds.refs()[0])
-    image = frame.image
-    assert image.shape[0] == beams and image.one_point_per_pixel
-    assert np.count_nonzero(image.ranges) == frame.points.shape[0] > 0.9 * 2250 * beams
-    el = np.arctan2(frame.points[:, 2], np.linalg.norm(frame.points[:, :2], axis=1))
-    row = image.point_pixel // image.shape[1]
-    assert np.abs(el - image.elevation[row]).max() < np.radians(0.3)
-    # every revolution as one pass of velodyne-decoder over the file gives it (2 complete ones
-    # and a remainder in 2.3 turns)
+    d.mkdir(exist_ok=True)
+    path = d / f"{model}.pcap"
+    _write_pcap(path, write_packets(model, azimuth, ranges), 2368)
+    return path, ranges, azimuth
+
+
+@pytest.mark.parametrize("model", ["HDL32E", "VLP32C", "HDL64E"])
+def test_velodyne_models_from_written_packets(tmp_path: Path, model: str) -> None:
+    """HDL-32E, VLP-32C and HDL-64E packets written per Velodyne's layout from known ranges,
+    read by flic (the HDL-64E with velodyne-decoder's bundled S3 calibration): rows = the
+    beams, top beam first; every return a point in its own pixel, no pixel without one; per
+    laser, the image row holds exactly the ranges written for it, firing after firing (the
+    rings and the firing order round-trip); each point at its laser's elevation."""
     import velodyne_decoder as vd
 
-    scans = list(vd.read_pcap(str(d / "v32.pcap"), vd.Config(model=getattr(vd.Model, name))))
-    assert len(ds.refs()) == len(scans) - 1 == 2
-    for ref, scan in zip(ds.refs(), scans, strict=False):
-        np.testing.assert_array_equal(ds.load(ref).points, scan.points[:, :3])
+    path, ranges, _ = _velodyne_capture(tmp_path, model)
+    lasers = ranges.shape[1]
+    reader = {}
+    if model == "HDL64E":
+        calib = tmp_path / "hdl64e.yml"
+        vd.get_bundled_calibration("HDL-64E_S3-VeloView.yml").write(str(calib))
+        reader = {"calibration": calib}
+    ds = open_dataset(path, reader=reader)
+    refs = ds.refs()
+    assert ds.format == "velodyne" and len(refs) == 2  # 2.3 turns: 2 complete
+    sensor = ds.sensor(refs[0])
+    assert sensor.beams == lasers and np.all(np.diff(sensor.elevation) < 0)  # row 0 = top
+    cal = ds.infos[model].state.sensor.calibration()
+    row_of_laser = np.argsort(np.argsort(-cal["vert_correction"], kind="stable"), kind="stable")
+    total = 0
+    for ref in refs:
+        frame = ds.load(ref)
+        image = frame.image
+        w = image.shape[1]
+        assert image.shape[0] == lasers and image.one_point_per_pixel
+        assert np.count_nonzero(image.ranges) == frame.points.shape[0]
+        total += frame.points.shape[0]
+        row = image.point_pixel // w
+        el = np.arctan2(frame.points[:, 2], np.linalg.norm(frame.points[:, :2], axis=1))
+        # a laser's vertical origin offset (HDL-64E calibration: up to 0.25 m) tilts near points
+        offset = np.abs(cal["vert_offset_correction"]).max() if model == "HDL64E" else 0.02
+        tol = 0.3 + np.degrees(offset / np.linalg.norm(frame.points, axis=1))
+        assert np.all(np.degrees(np.abs(el - image.elevation[row])) < tol)
+        if model == "HDL64E":  # ranges pass through the unit's distance corrections
+            continue
+        # every pixel (row of laser L, column c) holds a range written for laser L at a firing
+        # f with c = f + S mod W, one S for the whole frame: rings and firing order round-trip
+        shifts = []
+        for laser in range(lasers):
+            got = image.ranges[row_of_laser[laser]]
+            cols = np.flatnonzero(got)
+            for c, v in zip(cols.tolist(), got[cols].tolist(), strict=True):
+                # |xyz| is the range from the lasers' common origin: within 3 cm
+                f = np.flatnonzero(np.abs(ranges[:, laser] - v) < 0.03)
+                assert f.size, (laser, c, v)
+                shifts.append(set(((c - f) % w).tolist()))
+        common = set.intersection(*shifts)
+        assert len(common) >= 1, "no single firing -> column shift"
+    # every written return is a point of a frame or of the remainder left out
+    remainder = sum(int(p.split()[2].replace(",", "")) for p in ds.infos[model].partial)
+    assert total + remainder == np.count_nonzero(ranges)
+
+
+def test_hdl64e_without_calibration_names_the_option(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """HDL-64E packets carry no product id and this capture no calibration in its status
+    bytes: one line naming --calibration, exit 2; a file velodyne-decoder cannot read is one
+    line too."""
+    path, _, _ = _velodyne_capture(tmp_path, "HDL64E")
+    code, _, err = _cli(["info", path], capsys)
+    assert code == 2 and len(err.strip().splitlines()) == 1, err
+    assert "unknown Velodyne model" in err and "--calibration FILE" in err
+    bad = tmp_path / "bad.yml"
+    bad.write_text("lasers: [1, 2\n")
+    code, _, err = _cli(["info", path, "--calibration", bad], capsys)
+    assert code == 2 and "is not a velodyne-decoder calibration" in err, err
+    code, _, err = _cli(["info", path, "--calibration", tmp_path / "none.yml"], capsys)
+    assert code == 2 and "is no file" in err, err
 
 
 def test_organised_pcd_keeps_its_rows_and_columns(tmp_path: Path) -> None:

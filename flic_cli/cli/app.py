@@ -145,6 +145,14 @@ ColumnsOpt = Annotated[
         "Default: estimated from the median azimuth step between a ring's points.",
     ),
 ]
+CalibrationOpt = Annotated[
+    Path | None,
+    typer.Option(
+        "--calibration",
+        help="Velodyne pcap: a velodyne-decoder calibration (YAML) instead of the model's "
+        "built-in one; an HDL-64E whose packets carry none needs it.",
+    ),
+]
 ReturnOpt = Annotated[
     int | None,
     typer.Option(

@@ -7,6 +7,7 @@ from typing import Annotated, Any
 import typer
 
 from flic_cli.cli.app import (
+    CalibrationOpt,
     ColumnsOpt,
     DataArg,
     FramesOpt,
@@ -50,6 +51,7 @@ def info(
     columns: ColumnsOpt = None,
     rows: RowsOpt = None,
     return_index: ReturnOpt = None,
+    calibration: CalibrationOpt = None,
 ) -> None:
     """Show the format, sensor, frames, image size, points and coverage of DATA."""
     from flic_cli.cli.app import _data_or_sample
@@ -64,7 +66,7 @@ def info(
             typer.echo(line)
         if not chosen:
             return
-    reader = {"columns": columns, "rows": rows, "return": return_index}
+    reader = {"columns": columns, "rows": rows, "return": return_index, "calibration": calibration}
     for line in describe(path, seqs, frame_range, sample, reader):
         typer.echo(line)
 

@@ -8,6 +8,7 @@ from typing import Annotated
 import typer
 
 from flic_cli.cli.app import (
+    CalibrationOpt,
     ColumnsOpt,
     ConfigOpt,
     DataArg,
@@ -92,6 +93,7 @@ def segment(
     columns: ColumnsOpt = None,
     rows: RowsOpt = None,
     return_index: ReturnOpt = None,
+    calibration: CalibrationOpt = None,
 ) -> None:
     """Segment scans and write predictions: for SemanticKITTI `.label` files (cluster id in the
     upper 16 bits, 0 = unclustered, the semantic class in the lower 16; one label per point of
@@ -107,7 +109,8 @@ def segment(
     sel = Selection(
         _data_or_sample(data), seqs, frm, setting=setting, ground_remover=ground_remover,
         config=load_config(config), jobs=jobs, skip_bad=skip_bad,
-        reader={"columns": columns, "rows": rows, "return": return_index},
+        reader={"columns": columns, "rows": rows, "return": return_index,
+        "calibration": calibration},
     )  # fmt: skip
     summary = run_segment(
         SegmentRun(sel, out, resolve_method(method, mc), render, semantics, tuple(export or ()))

@@ -87,7 +87,7 @@ def open_dataset(
     sequences: list[str] | None = None,
     frames: tuple[int | None, int | None] | None = None,
     require_labels: bool = False,
-    reader: dict[str, int | None] | None = None,
+    reader: dict[str, Any] | None = None,
 ) -> Dataset:
     """Open a SemanticKITTI root or sequence, a Moosmann log or a folder of Moosmann logs.
 

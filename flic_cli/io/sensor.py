@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -80,14 +81,15 @@ READER_OPTIONS = {
     "columns": "columns per revolution W of a cloud without firing index (PCD)",
     "rows": "beams of a cloud without ring field (PCD)",
     "return": "the return read of a dual-return profile, 1 or 2 (Ouster pcap)",
+    "calibration": "a velodyne-decoder calibration file (Velodyne pcap; an HDL-64E needs one)",
 }
 
 
 def check_reader_options(
-    path: Path, fmt: str, accepted: tuple[str, ...], options: dict[str, int | None]
-) -> dict[str, int]:
+    path: Path, fmt: str, accepted: tuple[str, ...], options: dict[str, Any]
+) -> dict[str, Any]:
     """The reader options given (None values dropped), checked: known, taken by the format,
-    integers of at least 1 (columns at least 8).
+    integers of at least 1 (columns at least 8), a calibration an existing file.
 
     Raises
     ------
@@ -102,6 +104,10 @@ def check_reader_options(
             raise FlicInputError(
                 path, f"--{key} ({READER_OPTIONS[key]}) does not apply to {fmt} data"
             )
+        if key == "calibration":
+            if not Path(value).is_file():
+                raise FlicInputError(value, "(--calibration) is no file")
+            continue
         low = 8 if key == "columns" else 1
         if isinstance(value, bool) or not isinstance(value, int) or value < low:
             raise FlicInputError(path, f"--{key} must be an integer >= {low}, not {value!r}")
@@ -158,7 +164,7 @@ class SensorFileDataset:
         sequences: list[str] | None = None,
         frames: tuple[int | None, int | None] | None = None,
         require_labels: bool = False,
-        **options: int | None,
+        **options: Any,
     ) -> None:
         from flic_cli.io.base import FrameRef, frames_text, in_frames, select_sequences
 

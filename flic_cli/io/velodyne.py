@@ -73,11 +73,14 @@ class VelodyneSensor:
     return_mode : ``"strongest"``, ``"last"``, ``"dual"`` or ``"unknown"``.
     calibration_text : velodyne-decoder calibration (YAML text), None = its built-in one for
         the model. (Text, so that the object pickles for worker processes.)
+    assumed : the model is assumed (packets without product id, a calibration given), not read
+        from the packets.
     """
 
     model: str
     return_mode: str
     calibration_text: str | None = None
+    assumed: bool = False
 
     @property
     def config(self):  # noqa: ANN201
@@ -97,13 +100,18 @@ class VelodyneSensor:
 
     def calibration(self) -> dict[str, np.ndarray]:
         """The calibration's per-laser ``vert_correction``, ``rot_correction`` (radians) and
-        ``vert_offset_correction`` (metres), by laser id."""
+        ``vert_offset_correction`` and ``dist_correction`` (metres), by laser id."""
         vd = _vd()
         text = self.calibration_text
         if text is None:
             text = vd.Calibration.default_calibs[getattr(vd.Model, self.model)].to_string()
         out = {}
-        for key in ("vert_correction", "rot_correction", "vert_offset_correction"):
+        for key in (
+            "vert_correction",
+            "rot_correction",
+            "vert_offset_correction",
+            "dist_correction",
+        ):
             out[key] = np.array([float(v) for v in re.findall(rf"^\s*{key}:\s*(\S+)", text, re.M)])
         return out
 
@@ -113,6 +121,13 @@ class VelodyneSensor:
         order = np.argsort(cal["vert_correction"])[::-1]  # top beam first
         offsets = cal["vert_offset_correction"]
         notes = [f"return mode {self.return_mode}"]
+        if self.assumed:
+            notes.append(
+                f"model {self.model} assumed (no product id in the packets), with the "
+                "--calibration given"
+            )
+        elif self.calibration_text is not None:
+            notes.append("calibration: --calibration, or the one the packets carry (HDL-64E)")
         if offsets.size:
             notes.append(
                 "vertical beam origin offsets "
@@ -129,34 +144,67 @@ class VelodyneSensor:
         )
 
 
-def detect_sensor(payloads: list[bytes], path: object = None) -> VelodyneSensor:
-    """The model (from the factory byte) and return mode of a recording's data packets.
-
-    ``path`` is a pcap for velodyne-decoder's HDL-64E detection (HDL-64E packets carry no
-    factory byte).
+def read_calibration(path: str | Path) -> str:
+    """A velodyne-decoder calibration file (its YAML: ``distance_resolution`` and per-laser
+    ``vert_correction``, ``rot_correction``, ... in radians and metres), as text.
 
     Raises
     ------
     FlicInputError
-        When the model is unknown and cannot be detected.
+        When velodyne-decoder cannot read it.
+    """
+    try:
+        return _vd().Calibration.read(str(path)).to_string()
+    except Exception as exc:  # noqa: BLE001 - the binding raises RuntimeError / YAML errors
+        raise FlicInputError(
+            path, f"is not a velodyne-decoder calibration file ({type(exc).__name__}: {exc})"
+        ) from None
+
+
+HDL64E_HINT = (
+    "an HDL-64E (its packets carry no product id) is decoded with its per-unit calibration: "
+    "give --calibration FILE, velodyne-decoder's YAML (e.g. its bundled "
+    "HDL-64E_S3-VeloView.yml, or one made from the sensor's db.xml)"
+)
+
+
+def detect_sensor(
+    payloads: list[bytes], path: object = None, calibration: str | None = None
+) -> VelodyneSensor:
+    """The model (from the factory byte) and return mode of a recording's data packets.
+
+    Parameters
+    ----------
+    payloads : data packets (the first is read).
+    path : a pcap for velodyne-decoder's HDL-64E detection (an HDL-64E S2/S3 sends its
+        calibration in the status bytes of its packets; velodyne-decoder reads it from there).
+    calibration : velodyne-decoder calibration text (:func:`read_calibration`, the
+        ``calibration`` reader option): replaces the built-in one of a model with a product id;
+        for packets without one, the HDL-64E S3 is assumed with this calibration.
+
+    Raises
+    ------
+    FlicInputError
+        When the model is unknown and cannot be detected (naming ``--calibration``).
     """
     vd = _vd()
     first = payloads[0]
     factory, mode = first[1205], first[1204]
     ret = RETURN_MODES.get(mode, "unknown")
     if factory in FACTORY_MODELS:
-        name = FACTORY_MODELS[factory][0]
-        return VelodyneSensor(name, ret)
+        return VelodyneSensor(FACTORY_MODELS[factory][0], ret, calibration)
+    if calibration is not None:
+        return VelodyneSensor("HDL64E_S3", ret, calibration, assumed=True)
+    why = f"factory byte 0x{factory:02x}"
     if path is not None:
         try:
             model, calib = vd.hdl64e.detect_hdl64e(str(path))
-        except (ValueError, RuntimeError) as exc:
-            raise FlicInputError(path, f"unknown Velodyne model ({exc})") from None
-        if model is not None:
-            return VelodyneSensor(str(model).split(".")[-1], ret, calib.to_string())
-    raise FlicInputError(
-        path, f"unknown Velodyne model (factory byte 0x{factory:02x}); velodyne-decoder cannot tell"
-    )
+        except (ValueError, RuntimeError, KeyError) as exc:
+            why = f"no calibration in its status bytes: {exc}"
+        else:
+            if model is not None:
+                return VelodyneSensor(str(model).split(".")[-1], ret, calib.to_string())
+    raise FlicInputError(path, f"unknown Velodyne model ({why}); {HDL64E_HINT}")
 
 
 @dataclass(frozen=True, eq=False)
@@ -344,6 +392,7 @@ class VelodynePcapDataset(SensorFileDataset):
 
     format = FORMAT
     suffixes = (".pcap", ".pcapng")
+    reader_options = ("calibration",)
 
     @classmethod
     def accepts(cls, path: Path) -> bool:
@@ -372,7 +421,8 @@ class VelodynePcapDataset(SensorFileDataset):
                 + (f" (sizes {', '.join(map(str, sizes))} bytes)" if sizes else "")
                 + ", and no Ouster metadata JSON beside it",
             )
-        sensor = detect_sensor([first], path)
+        given = self.options.get("calibration")
+        sensor = detect_sensor([first], path, None if given is None else read_calibration(given))
         kept: list[int] = []
 
         def packets() -> Iterator[tuple[float, bytes]]:  # data packets, read a chunk at a time

@@ -60,7 +60,7 @@ class Selection:
     jobs: int = 1
     skip_bad: bool = False
     progress: bool = True
-    reader: dict[str, int | None] | None = None
+    reader: dict[str, object] | None = None
 
     def setting_or(self, default: str) -> str:
         """:attr:`setting`, or the command's ``default`` when None."""
