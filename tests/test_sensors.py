@@ -570,6 +570,12 @@ def test_ascii_pcd_reads_as_pypcd4_does(tmp_path: Path, capsys: pytest.CaptureFi
     assert xyz.dtype.names == ("x", "y", "z")
     np.testing.assert_array_equal(xyz["y"], theirs["y"])
     text = path.read_bytes()
+    head, data = text.split(b"DATA ascii\n")
+    spaced = data.replace(b" ", b"  ").replace(b"\n", b" \n")  # other writers' spacing
+    (tmp_path / "spaced.pcd").write_bytes(head + b"DATA ascii\n" + spaced)
+    loose = read_pcd(tmp_path / "spaced.pcd")
+    for name in theirs.dtype.names:
+        np.testing.assert_array_equal(loose[name], theirs[name])
     (tmp_path / "cut.pcd").write_bytes(text[: len(text) * 2 // 3].rsplit(b"\n", 1)[0] + b"\n")
     code, _, err = _cli(["info", tmp_path / "cut.pcd"], capsys)
     assert code == 2 and "of the 500 points its header declares" in err, err
@@ -897,21 +903,7 @@ def test_frames_count_complete_revolutions_inside_a_pcap(tmp_path: Path) -> None
     d = tmp_path / "in"
     d.mkdir()
     _write_pcap(d / "rec.pcap", packets, 7502)
-    js = {
-        "beam_altitude_angles": meta.altitude_deg.tolist(),
-        "beam_azimuth_angles": meta.azimuth_deg.tolist(),
-        "lidar_mode": f"{meta.columns}x10",
-        "udp_port_lidar": 7502,
-        "data_format": {
-            "pixels_per_column": meta.beams,
-            "columns_per_packet": 16,
-            "columns_per_frame": meta.columns,
-            "pixel_shift_by_row": meta.pixel_shift.tolist(),
-            "column_window": [0, meta.columns - 1],
-            "udp_profile_lidar": meta.profile,
-        },
-    }
-    (d / "rec.json").write_text(json.dumps(js))
+    (d / "rec.json").write_text(json.dumps(_ouster_json(meta)))
     ds = open_dataset(d / "rec.pcap")
     assert [r.frame for r in ds.refs()] == [0, 1]
     assert len(ds.infos["rec"].partial) == 2
