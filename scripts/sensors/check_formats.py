@@ -3,7 +3,8 @@
     python scripts/sensors/check_formats.py --out results/sensors/formats_check.csv
 
 For each recording of ../shared/data/sensors (Ouster, Velodyne, PCD, nuScenes) and each method
-variant of the default config: the frame's points as stored, the labels returned (must be one
+variant the config runs by default (``--methods all``: every variant but the per-class ALPINE
+ones, which need semantic classes): the frame's points as stored, the labels returned (must be one
 per point), clusters, and the seconds the call took (first call per method includes numba's
 cache load; the machine was shared, so these are no benchmark).
 """
@@ -24,9 +25,21 @@ import flic_cli.api as flic
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--out", type=Path, default=ROOT / "results/sensors/formats_check.csv")
-    parser.add_argument("--methods", default=None, help="comma-separated; default: all")
+    parser.add_argument(
+        "--methods",
+        default=None,
+        help="comma-separated, or `all`; default: the config's default_methods (those `flic "
+        "evaluate` runs)",
+    )
     args = parser.parse_args()
-    methods = args.methods.split(",") if args.methods else flic.methods()
+    if args.methods == "all":  # per-class ALPINE needs semantic classes: a recording has none
+        methods = [m for m in flic.methods() if m not in ("alpine", "alpine-k32")]
+    elif args.methods:
+        methods = args.methods.split(",")
+    else:
+        from flic_cli.config import load_config
+
+        methods = list(load_config().default_methods)
     rows = []
     for rec in RECORDINGS:
         frame = flic.load_frame(SENSORS / rec)
