@@ -433,8 +433,11 @@ class VelodynePcapDataset(SensorFileDataset):
                     yield stamps[k], payload
 
         scans, partial = [], []
+        width = 0
         for scan in decode_scans(packets(), sensor):  # one scan in memory at once
             if scan.complete:
+                if not scans:  # the sensor model's columns: the first revolution's firings
+                    width = int(scan.points["column"].max()) + 1 if len(scan.points) else 1
                 scans.append((scan.first_packet, scan.last_packet, len(scan.points)))
             else:
                 partial.append(f"remainder of {len(scan.points):,} points")
@@ -443,7 +446,6 @@ class VelodynePcapDataset(SensorFileDataset):
             raise FlicInputError(
                 path, f"has no complete revolution ({'; '.join(partial) or 'no points'})"
             )
-        width = self._first_width(index, data, scans[0], sensor)
         return FileInfo(
             path,
             len(scans),
@@ -468,13 +470,6 @@ class VelodynePcapDataset(SensorFileDataset):
         if len(points) != n:
             raise FlicInputError(path, f"frame {k} decodes differently than when it was opened")
         return VelodyneScan(stamp, points, True, first, last)
-
-    def _first_width(
-        self, index: object, data: np.ndarray, scan: tuple[int, int, int], sensor: VelodyneSensor
-    ) -> int:
-        state = _PcapState(index, sensor, data, [scan])
-        pts = self._scan(state, 0, Path(index.path)).points  # type: ignore[attr-defined]
-        return int(pts["column"].max()) + 1
 
     def _load(self, info: FileInfo, k: int) -> Frame:
         state: _PcapState = info.state  # type: ignore[assignment]
