@@ -988,17 +988,18 @@ def test_velodyne_models_from_written_packets(tmp_path: Path, model: str) -> Non
         offset = np.abs(cal["vert_offset_correction"]).max() if model == "HDL64E" else 0.02
         tol = 0.3 + np.degrees(offset / np.linalg.norm(frame.points, axis=1))
         assert np.all(np.degrees(np.abs(el - image.elevation[row])) < tol)
-        if model == "HDL64E":  # ranges pass through the unit's distance corrections
-            continue
         # every pixel (row of laser L, column c) holds a range written for laser L at a firing
-        # f with c = f + S mod W, one S for the whole frame: rings and firing order round-trip
+        # f with c = f + S mod W, one S for the whole frame: rings and firing order round-trip.
+        # |xyz| is the range from the lasers' common origin: within 3 cm; the HDL-64E's adds
+        # the laser's dist_correction (and its x/y and focal corrections: within 30 cm)
+        near = 0.3 if model == "HDL64E" else 0.03
         shifts = []
         for laser in range(lasers):
             got = image.ranges[row_of_laser[laser]]
+            expect = ranges[:, laser] + (cal["dist_correction"][laser] if model == "HDL64E" else 0)
             cols = np.flatnonzero(got)
             for c, v in zip(cols.tolist(), got[cols].tolist(), strict=True):
-                # |xyz| is the range from the lasers' common origin: within 3 cm
-                f = np.flatnonzero(np.abs(ranges[:, laser] - v) < 0.03)
+                f = np.flatnonzero((np.abs(expect - v) < near) & (ranges[:, laser] > 0))
                 assert f.size, (laser, c, v)
                 shifts.append(set(((c - f) % w).tolist()))
         common = set.intersection(*shifts)

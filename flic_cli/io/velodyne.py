@@ -15,7 +15,6 @@ HDL-64E S1/S2/S3, VLS-128, Alpha Prime); tested on the VLP-16 recording of the s
 
 from __future__ import annotations
 
-import re
 import struct
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass
@@ -99,21 +98,19 @@ class VelodyneSensor:
         return f"Velodyne {self.model}"
 
     def calibration(self) -> dict[str, np.ndarray]:
-        """The calibration's per-laser ``vert_correction``, ``rot_correction`` (radians) and
-        ``vert_offset_correction`` and ``dist_correction`` (metres), by laser id."""
+        """The calibration's per-laser ``vert_correction``, ``rot_correction`` (radians),
+        ``vert_offset_correction`` and ``dist_correction`` (metres), by laser id (0 where the
+        calibration leaves a key out), read from its YAML with PyYAML (velodyne-decoder's own
+        dependency)."""
+        import yaml
+
         vd = _vd()
         text = self.calibration_text
         if text is None:
             text = vd.Calibration.default_calibs[getattr(vd.Model, self.model)].to_string()
-        out = {}
-        for key in (
-            "vert_correction",
-            "rot_correction",
-            "vert_offset_correction",
-            "dist_correction",
-        ):
-            out[key] = np.array([float(v) for v in re.findall(rf"^\s*{key}:\s*(\S+)", text, re.M)])
-        return out
+        lasers = sorted(yaml.safe_load(text)["lasers"], key=lambda laser: int(laser["laser_id"]))
+        keys = ("vert_correction", "rot_correction", "vert_offset_correction", "dist_correction")
+        return {k: np.array([float(laser.get(k, 0.0)) for laser in lasers]) for k in keys}
 
     def sensor_model(self, columns: int) -> SensorModel:
         """Beam angles from velodyne-decoder's calibration, rows sorted top to bottom."""
@@ -128,7 +125,7 @@ class VelodyneSensor:
             )
         elif self.calibration_text is not None:
             notes.append("calibration: --calibration, or the one the packets carry (HDL-64E)")
-        if offsets.size:
+        if np.any(offsets):
             notes.append(
                 "vertical beam origin offsets "
                 f"{1000 * offsets.min():+.1f} .. {1000 * offsets.max():+.1f} mm (calibration)"
