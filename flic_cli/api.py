@@ -99,7 +99,12 @@ def run(spec: SegmentRun | EvaluateRun | BenchmarkRun | SweepRun) -> Any:
     raise TypeError(f"not a run specification: {type(spec).__name__}")
 
 
-def load_frame(data: str | Path, frame: int = 0, sequence: str | None = None) -> Frame:
+def load_frame(
+    data: str | Path,
+    frame: int = 0,
+    sequence: str | None = None,
+    reader: dict[str, object] | None = None,
+) -> Frame:
     """Load one frame of a dataset (SemanticKITTI or a Moosmann log).
 
     Parameters
@@ -107,6 +112,8 @@ def load_frame(data: str | Path, frame: int = 0, sequence: str | None = None) ->
     data : a SemanticKITTI root or sequence folder, or a Moosmann log.
     frame : the frame number.
     sequence : the sequence (or log) name; default: the first that has the frame.
+    reader : reader options, e.g. ``{"columns": 1800, "rows": 16}`` for a PCD without ring
+        field (see :func:`flic_cli.io.open_dataset`).
 
     Returns
     -------
@@ -116,7 +123,9 @@ def load_frame(data: str | Path, frame: int = 0, sequence: str | None = None) ->
     """
     from flic_cli.io import open_dataset
 
-    ds = open_dataset(data, None if sequence is None else [sequence], (frame, frame + 1))
+    ds = open_dataset(
+        data, None if sequence is None else [sequence], (frame, frame + 1), reader=reader
+    )
     return ds.load(ds.refs()[0])
 
 

@@ -137,6 +137,39 @@ TopicOpt = Annotated[
     ),
 ]
 
+ColumnsOpt = Annotated[
+    int | None,
+    typer.Option(
+        "--columns",
+        help="PCD: columns per revolution W (the firings of a turn, e.g. 1800 for 0.2 deg). "
+        "Default: estimated from the median azimuth step between a ring's points.",
+    ),
+]
+CalibrationOpt = Annotated[
+    Path | None,
+    typer.Option(
+        "--calibration",
+        help="Velodyne pcap: a velodyne-decoder calibration (YAML) instead of the model's "
+        "built-in one; an HDL-64E whose packets carry none needs it.",
+    ),
+]
+ReturnOpt = Annotated[
+    int | None,
+    typer.Option(
+        "--return",
+        help="Ouster pcap of a dual-return profile: the return each pixel is read from, 1 "
+        "(the first, default) or 2.",
+    ),
+]
+RowsOpt = Annotated[
+    int | None,
+    typer.Option(
+        "--rows",
+        help="PCD without a ring field: the sensor's beams (rows). Default: estimated from "
+        "gaps in the points' elevations.",
+    ),
+]
+
 
 def ground_remover_option(default_help: str) -> Any:
     """The ``--ground-remover`` option, listing the registered removers."""

@@ -8,9 +8,13 @@ from typing import Annotated
 import typer
 
 from flic_cli.cli.app import (
+    CalibrationOpt,
+    ColumnsOpt,
     ConfigOpt,
     DataArg,
     FramesOpt,
+    ReturnOpt,
+    RowsOpt,
     SequencesOpt,
     SettingOpt,
     SkipBadOpt,
@@ -99,6 +103,10 @@ def benchmark(
     ] = True,
     skip_bad: SkipBadOpt = False,
     topic: TopicOpt = None,
+    columns: ColumnsOpt = None,
+    rows: RowsOpt = None,
+    return_index: ReturnOpt = None,
+    calibration: CalibrationOpt = None,
 ) -> None:
     """Time the segmentation of every frame (range image in, labels out, ground extraction
     included), single-threaded, after a warm-up, each method in a pass over the frames of its
@@ -123,6 +131,8 @@ def benchmark(
     sel = Selection(
         _data_or_sample(data, moosmann=True), seqs, frm, setting=setting,
         ground_remover=ground_remover, config=cfg, skip_bad=skip_bad,
+        reader={"columns": columns, "rows": rows, "return": return_index,
+        "calibration": calibration},
     )  # fmt: skip
     result = run_benchmark(
         BenchmarkRun(sel, out, names, warmup, repeat, rounds, slow_every, threads, plots)

@@ -7,8 +7,12 @@ from typing import Annotated, Any
 import typer
 
 from flic_cli.cli.app import (
+    CalibrationOpt,
+    ColumnsOpt,
     DataArg,
     FramesOpt,
+    ReturnOpt,
+    RowsOpt,
     SequencesOpt,
     TopicOpt,
     _selection,
@@ -44,6 +48,10 @@ def info(
         ),
     ] = 20,
     topic: TopicOpt = None,
+    columns: ColumnsOpt = None,
+    rows: RowsOpt = None,
+    return_index: ReturnOpt = None,
+    calibration: CalibrationOpt = None,
 ) -> None:
     """Show the format, sensor, frames, image size, points and coverage of DATA."""
     from flic_cli.cli.app import _data_or_sample
@@ -58,11 +66,14 @@ def info(
             typer.echo(line)
         if not chosen:
             return
-    for line in describe(path, seqs, frame_range, sample):
+    reader = {"columns": columns, "rows": rows, "return": return_index, "calibration": calibration}
+    for line in describe(path, seqs, frame_range, sample, reader):
         typer.echo(line)
 
 
-def describe(path: Any, sequences: Any, frames: Any, sample: int = 20) -> list[str]:
+def describe(
+    path: Any, sequences: Any, frames: Any, sample: int = 20, reader: Any = None
+) -> list[str]:
     """The lines ``flic info`` prints."""
     import numpy as np
 
@@ -70,7 +81,7 @@ def describe(path: Any, sequences: Any, frames: Any, sample: int = 20) -> list[s
     from flic_cli.io import open_dataset
     from flic_cli.projection import Projection
 
-    ds = open_dataset(path, sequences, frames)
+    ds = open_dataset(path, sequences, frames, reader=reader)
     entry = registry.FORMATS.get(ds.format)
     lines = [f"data: {path}", f"format: {ds.format}" + (f" ({entry.summary})" if entry else "")]
     by_seq: dict[str, list] = {}

@@ -8,12 +8,16 @@ from typing import Annotated
 import typer
 
 from flic_cli.cli.app import (
+    CalibrationOpt,
+    ColumnsOpt,
     ConfigOpt,
     DataArg,
     FramesOpt,
     JobsOpt,
     McOpt,
     MethodOpt,
+    ReturnOpt,
+    RowsOpt,
     SequencesOpt,
     SettingOpt,
     SkipBadOpt,
@@ -86,6 +90,10 @@ def segment(
     jobs: JobsOpt = 1,
     skip_bad: SkipBadOpt = False,
     topic: TopicOpt = None,
+    columns: ColumnsOpt = None,
+    rows: RowsOpt = None,
+    return_index: ReturnOpt = None,
+    calibration: CalibrationOpt = None,
 ) -> None:
     """Segment scans and write predictions: for SemanticKITTI `.label` files (cluster id in the
     upper 16 bits, 0 = unclustered, the semantic class in the lower 16; one label per point of
@@ -101,6 +109,8 @@ def segment(
     sel = Selection(
         _data_or_sample(data), seqs, frm, setting=setting, ground_remover=ground_remover,
         config=load_config(config), jobs=jobs, skip_bad=skip_bad,
+        reader={"columns": columns, "rows": rows, "return": return_index,
+        "calibration": calibration},
     )  # fmt: skip
     summary = run_segment(
         SegmentRun(sel, out, resolve_method(method, mc), render, semantics, tuple(export or ()))

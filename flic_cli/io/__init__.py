@@ -87,6 +87,7 @@ def open_dataset(
     sequences: list[str] | None = None,
     frames: tuple[int | None, int | None] | None = None,
     require_labels: bool = False,
+    reader: dict[str, Any] | None = None,
 ) -> Dataset:
     """Open a SemanticKITTI root or sequence, a Moosmann log or a folder of Moosmann logs.
 
@@ -97,6 +98,8 @@ def open_dataset(
     frames : ``(start, stop)`` frame numbers, start inclusive, stop exclusive, None = open.
     require_labels : fail unless every selected frame has ground-truth labels (Moosmann logs
         have none).
+    reader : reader options, e.g. ``{"columns": 1800, "rows": 16}`` for a PCD without ring
+        field (:data:`flic_cli.io.sensor.READER_OPTIONS`); None values are left out.
 
     Raises
     ------
@@ -113,7 +116,11 @@ def open_dataset(
             continue
         cls = format_class(name)
         if cls.detect(path):
-            return cls(path, sequences, frames, require_labels)
+            options = {k: v for k, v in (reader or {}).items() if v is not None}
+            if options and not hasattr(cls, "reader_options"):
+                key = next(iter(options))
+                raise FlicInputError(path, f"--{key} does not apply to {name} data")
+            return cls(path, sequences, frames, require_labels, **options)
     known = "; ".join(e.summary for e in registry.FORMATS.values() if e.missing() is None)
     more = f" (not tried: {'; '.join(unavailable)})" if unavailable else ""
     raise FlicInputError(path, f"is none of: {known}{more}")

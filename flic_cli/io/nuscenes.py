@@ -165,10 +165,11 @@ class NuScenesDataset(SensorFileDataset):
         sequences: list[str] | None = None,
         frames: tuple[int | None, int | None] | None = None,
         require_labels: bool = False,
+        **options: int | None,
     ) -> None:
         root = Path(root)
         self._tokens = _token_labels(root) if root.is_dir() else {}
-        super().__init__(root, sequences, frames, require_labels)
+        super().__init__(root, sequences, frames, require_labels, **options)
 
     def _label_path(self, path: Path) -> Path | None:
         name = path.name[: -len(SUFFIX)]

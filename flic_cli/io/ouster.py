@@ -19,6 +19,15 @@ views, no per-pixel Python):
   near-IR u16; reserved u16), 32-byte footer.
 - ``RNG15_RFL8_NIR8`` (low data rate): as above with 4-byte channels (range u16, low 15 bits, in
   units of 8 mm; reflectivity u8; near-IR u8).
+- ``RNG19_RFL8_SIG16_NIR16_DUAL`` (dual return): as ``RNG19_RFL8_SIG16_NIR16`` with 16-byte
+  channels: first return's range (u32, low 19 bits, mm) with its reflectivity in byte 3, the
+  second return's range (u32 at byte 4, low 19 bits) with its reflectivity in byte 7, signal u16
+  and second signal u16 (bytes 8, 10), near-IR u16 (byte 12). flic reads one return per pixel:
+  the first (the strongest, in Ouster's definition) by default, the second with the ``return``
+  reader option (``--return 2``).
+
+The layouts are those of ouster-sdk's field tables (``ouster_core/src/parsing.cpp``); other
+profiles (the FUSA / zone-monitoring ones, RGB) are refused with the list of these.
 
 Metadata: both JSON layouts (firmware <= 2.3 "flat", and the nested ``sensor_info`` /
 ``lidar_data_format`` / ``beam_intrinsics`` one of later firmware and of ouster-sdk). Fields
@@ -36,6 +45,7 @@ then ``lidar_to_sensor_transform`` gives the sensor frame (x forward, y left, z 
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import os
 from collections.abc import Iterable, Iterator
@@ -59,6 +69,38 @@ PROFILES: dict[str, tuple[int, int, int, int]] = {
     "LEGACY": (0, 16, 12, 0),  # + 4-byte status at the end of each column
     "RNG19_RFL8_SIG16_NIR16": (32, 12, 12, 32),
     "RNG15_RFL8_NIR8": (32, 12, 4, 32),
+    "RNG19_RFL8_SIG16_NIR16_DUAL": (32, 12, 16, 32),
+}
+
+#: Channel fields per profile: ``name -> (byte offset in the channel, dtype, bit mask (0 =
+#: all), multiplier)``; a second return's fields end in ``2``.
+CHANNEL_FIELDS: dict[str, dict[str, tuple[int, str, int, int]]] = {
+    "LEGACY": {
+        "range": (0, "<u4", 0xFFFFF, 1),
+        "reflectivity": (4, "<u2", 0, 1),
+        "signal": (6, "<u2", 0, 1),
+        "near_ir": (8, "<u2", 0, 1),
+    },
+    "RNG19_RFL8_SIG16_NIR16": {
+        "range": (0, "<u4", 0x7FFFF, 1),
+        "reflectivity": (4, "u1", 0, 1),
+        "signal": (6, "<u2", 0, 1),
+        "near_ir": (8, "<u2", 0, 1),
+    },
+    "RNG15_RFL8_NIR8": {
+        "range": (0, "<u2", 0x7FFF, 8),
+        "reflectivity": (2, "u1", 0, 1),
+        "near_ir": (3, "u1", 0, 1),
+    },
+    "RNG19_RFL8_SIG16_NIR16_DUAL": {
+        "range": (0, "<u4", 0x7FFFF, 1),
+        "reflectivity": (3, "u1", 0, 1),
+        "range2": (4, "<u4", 0x7FFFF, 1),
+        "reflectivity2": (7, "u1", 0, 1),
+        "signal": (8, "<u2", 0, 1),
+        "signal2": (10, "<u2", 0, 1),
+        "near_ir": (12, "<u2", 0, 1),
+    },
 }
 
 #: ouster-sdk's default ``lidar_to_sensor_transform`` (a half turn about z, 36.18 mm up).
@@ -114,6 +156,9 @@ class OusterMeta:
     lidar_to_sensor : (4, 4) float64 lidar-to-sensor transform (translation in mm).
     udp_port_lidar : the lidar data's UDP port, or None when the metadata does not say.
     defaulted : names of the fields that were missing and defaulted as ouster-sdk does.
+    return_index : which return a pixel's range (and fields) come from: 1, or 2 for the second
+        return of a dual-return profile (not part of the metadata: the ``return`` reader
+        option, see :meth:`with_return`).
     """
 
     prod_line: str
@@ -132,6 +177,29 @@ class OusterMeta:
     lidar_to_sensor: np.ndarray
     udp_port_lidar: int | None = None
     defaulted: tuple[str, ...] = field(default=())
+    return_index: int = 1
+
+    def with_return(self, index: int) -> OusterMeta:
+        """This metadata reading return ``index`` (1 or 2) of every pixel.
+
+        Raises
+        ------
+        OusterDataError
+            When the profile has no such return.
+        """
+        returns = 2 if "range2" in CHANNEL_FIELDS[self.profile] else 1
+        if index not in range(1, returns + 1):
+            raise OusterDataError(
+                f"profile {self.profile} has {returns} return{'s' if returns > 1 else ''} per "
+                f"pixel: --return {index} asks for another"
+            )
+        return dataclasses.replace(self, return_index=int(index))
+
+    def field_name(self, name: str) -> str:
+        """The channel field ``name`` (``"range"``, ``"reflectivity"``, ...) of the return read:
+        ``"range2"`` for the second."""
+        second = f"{name}2"
+        return second if self.return_index == 2 and second in CHANNEL_FIELDS[self.profile] else name
 
     @classmethod
     def from_json(cls, meta: dict) -> OusterMeta:
@@ -374,8 +442,8 @@ def _frame_id(payload: bytes, meta: OusterMeta) -> int:
 
 
 def _decode(batch: np.ndarray, meta: OusterMeta, fields: tuple[str, ...]) -> dict[str, np.ndarray]:
-    """Decode (P, packet_size) uint8 packets: measurement ids and status (P, C), channels
-    (P, C, H)."""
+    """Decode (P, packet_size) uint8 packets: measurement ids and status (P, C), the channel
+    ``fields`` of the return read (P, C, H; see :data:`CHANNEL_FIELDS`)."""
     head, col_head, chan, foot = PROFILES[meta.profile]
     h, c = meta.beams, meta.columns_per_packet
     status_bytes = 4 if meta.profile == "LEGACY" else 0
@@ -388,23 +456,15 @@ def _decode(batch: np.ndarray, meta: OusterMeta, fields: tuple[str, ...]) -> dic
         valid = (cols[:, :, 10] & 1).astype(bool)
     ch = cols[:, :, col_head : col_head + h * chan].reshape(-1, c, h, chan)
     out = {"measurement_id": mid, "valid": valid}
-    if chan == 12:
-        rng = ch[..., 0:4].copy().view("<u4")[..., 0]
-        rng &= np.uint32(0xFFFFF if meta.profile == "LEGACY" else 0x7FFFF)
-        out["range"] = rng
-        if meta.profile == "LEGACY":
-            layout = {"reflectivity": (4, "<u2"), "signal": (6, "<u2"), "near_ir": (8, "<u2")}
-        else:
-            layout = {"reflectivity": (4, "u1"), "signal": (6, "<u2"), "near_ir": (8, "<u2")}
-    else:
-        rng = ch[..., 0:2].copy().view("<u2")[..., 0].astype(np.uint32)
-        out["range"] = (rng & np.uint32(0x7FFF)) * np.uint32(8)
-        layout = {"reflectivity": (2, "u1"), "near_ir": (3, "u1")}
+    layout = CHANNEL_FIELDS[meta.profile]
     for name in fields:
-        if name in layout:
-            o, dt = layout[name]
+        if meta.field_name(name) in layout:
+            o, dt, mask, scale = layout[meta.field_name(name)]
             size = np.dtype(dt).itemsize
-            out[name] = ch[..., o : o + size].copy().view(dt)[..., 0]
+            value = ch[..., o : o + size].copy().view(dt)[..., 0]
+            if mask:
+                value &= np.array(mask, dtype=value.dtype)
+            out[name] = value if scale == 1 else value.astype(np.uint32) * np.uint32(scale)
     return out
 
 
@@ -469,20 +529,16 @@ def _assemble(
 ) -> OusterFrame:
     buf = np.frombuffer(b"".join(batch), dtype=np.uint8)
     head, col_head, chan, _ = PROFILES[meta.profile]
-    legacy = meta.profile == "LEGACY"
+    offset, _, mask, scale = CHANNEL_FIELDS[meta.profile][meta.field_name("range")]
     h, w = meta.beams, meta.columns
     out = np.zeros((h, w), dtype=np.uint32)
     columns = np.zeros(w, dtype=np.bool_)
-    if chan == 12:  # 4-byte aligned ranges: read them as uint32
-        bad = _decode_ranges32(
-            buf.view("<u4"), len(batch), meta.packet_size // 4, head // 4, col_head // 4,
-            meta.columns_per_packet, legacy, out, columns,
-        )  # fmt: skip
-    else:
-        bad = _decode_ranges(
-            buf, len(batch), meta.packet_size, head, col_head, chan, meta.columns_per_packet,
-            legacy, out, columns,
-        )  # fmt: skip
+    # every profile's packets, columns and channels are whole 4-byte words, and every range
+    # field starts a word: read them as little-endian uint32 words
+    bad = _decode_ranges(
+        buf.view("<u4"), len(batch), meta.packet_size // 4, head // 4, col_head // 4, chan // 4,
+        offset // 4, meta.columns_per_packet, meta.profile == "LEGACY", mask, scale, out, columns,
+    )  # fmt: skip
     if bad >= 0:
         raise OusterDataError(
             f"a packet holds measurement id {bad}, beyond the {meta.columns} columns "
@@ -505,22 +561,29 @@ def _assemble(
 
 
 @njit(cache=True)
-def _decode_ranges32(
+def _decode_ranges(
     words: np.ndarray,
     n_packets: int,
     size: int,
     head: int,
     col_head: int,
+    chan: int,
+    field: int,
     cols: int,
     legacy: bool,
+    mask: int,
+    scale: int,
     out: np.ndarray,
     columns: np.ndarray,
 ) -> int:
-    """:func:`_decode_ranges` for 12-byte channels, over the packets as uint32 words (all
-    offsets in words)."""
+    """Fill the staggered (H, W) range image ``out`` (mm) and the received-column mask from
+    ``n_packets`` packets given as uint32 words (every size and offset in words: packet, packet
+    header, column header, channel, the range's word in the channel); range = ``(word & mask)
+    * scale``. Returns -1, or a measurement id beyond W (then stops)."""
     h, w = out.shape
-    col_size = col_head + 3 * h + (1 if legacy else 0)
-    mask = np.uint32(0xFFFFF) if legacy else np.uint32(0x7FFFF)
+    col_size = col_head + chan * h + (1 if legacy else 0)
+    m32 = np.uint32(mask)
+    s32 = np.uint32(scale)
     for p in range(n_packets):
         for c in range(cols):
             base = p * size + head + c * col_size
@@ -534,58 +597,9 @@ def _decode_ranges32(
             if mid >= w:
                 return mid
             columns[mid] = True
-            o = base + col_head
+            o = base + col_head + field
             for i in range(h):
-                out[i, mid] = words[o + 3 * i] & mask
-    return -1
-
-
-@njit(cache=True)
-def _decode_ranges(
-    buf: np.ndarray,
-    n_packets: int,
-    size: int,
-    head: int,
-    col_head: int,
-    chan: int,
-    cols: int,
-    legacy: bool,
-    out: np.ndarray,
-    columns: np.ndarray,
-) -> int:
-    """Fill the staggered (H, W) range image ``out`` (mm) and the received-column mask from
-    ``n_packets`` packets in ``buf``; returns -1, or a measurement id beyond W (then stops)."""
-    h, w = out.shape
-    status = 4 if legacy else 0
-    col_size = col_head + h * chan + status
-    for p in range(n_packets):
-        for c in range(cols):
-            base = p * size + head + c * col_size
-            mid = np.int64(buf[base + 8]) | (np.int64(buf[base + 9]) << 8)
-            if legacy:
-                e = base + col_size - 4
-                ok = (buf[e] & buf[e + 1] & buf[e + 2] & buf[e + 3]) == 0xFF
-            else:
-                ok = (buf[base + 10] & 1) == 1
-            if not ok:
-                continue
-            if mid >= w:
-                return mid
-            columns[mid] = True
-            o = base + col_head
-            for i in range(h):
-                if chan == 12:
-                    r = (
-                        np.uint32(buf[o])
-                        | (np.uint32(buf[o + 1]) << 8)
-                        | (np.uint32(buf[o + 2]) << 16)
-                        | (np.uint32(buf[o + 3]) << 24)
-                    )
-                    r &= np.uint32(0xFFFFF) if legacy else np.uint32(0x7FFFF)
-                else:
-                    r = ((np.uint32(buf[o]) | (np.uint32(buf[o + 1]) << 8)) & 0x7FFF) * 8
-                out[i, mid] = r
-                o += chan
+                out[i, mid] = (words[o + chan * i] & m32) * s32
     return -1
 
 
@@ -708,6 +722,7 @@ class OusterPcapDataset(SensorFileDataset):
 
     format = FORMAT
     suffixes = (".pcap", ".pcapng")
+    reader_options = ("return",)
 
     @classmethod
     def accepts(cls, path: Path) -> bool:
@@ -728,6 +743,10 @@ class OusterPcapDataset(SensorFileDataset):
         if meta_path is None:
             raise FlicInputError(path, "has no Ouster metadata JSON beside it")
         meta = read_meta(meta_path)
+        try:
+            meta = meta.with_return(self.options.get("return", 1))
+        except OusterDataError as exc:
+            raise FlicInputError(path, f"{exc} (metadata {meta_path.name})") from None
         index = index_udp(path)
         if index.size.size == 0:
             raise FlicInputError(
@@ -787,6 +806,8 @@ class OusterPcapDataset(SensorFileDataset):
             )
         model = meta.sensor_model()
         notes = model.notes + (f"metadata {meta_path.name}",)
+        if "range2" in CHANNEL_FIELDS[meta.profile]:
+            notes += (f"dual-return profile: return {meta.return_index} of 2 read (--return)",)
         model = SensorModel(
             model.name, model.elevation, model.azimuth_offset, model.columns,
             model.angles_from, model.beam_origin_mm, model.columns_from, notes,

@@ -64,10 +64,14 @@ def fit_azimuth(field_rad: np.ndarray, atan_az: np.ndarray) -> tuple[float, floa
 
 def estimate_width(azimuth: np.ndarray, ring: np.ndarray) -> int:
     """Columns per revolution from the median azimuth step (radians) between neighbouring points
-    of a ring (sorted by azimuth, repeated azimuths of dual returns skipped)."""
+    of a ring (sorted by azimuth, repeated azimuths of dual returns skipped).
+
+    The step is the cloud's own point spacing: where a ring returns only every other firing
+    (the Helios-16P recording: steps of 0.1 and 0.2 deg), that gives W for the finer spacing, and
+    row neighbours are then often a column apart; the ``columns`` reader option states W."""
     steps = []
     for r in np.unique(ring):
-        a = np.unique(np.round(np.sort(azimuth[ring == r]), 6))
+        a = np.unique(np.sort(azimuth[ring == r]))
         if a.size > 8:
             d = np.diff(a)
             steps.append(d[d > 1e-6])
@@ -77,17 +81,34 @@ def estimate_width(azimuth: np.ndarray, ring: np.ndarray) -> int:
     return int(np.clip(round(2 * np.pi / step), 8, 65536))
 
 
-def estimate_rings(points: np.ndarray, gap_deg: float = 0.4) -> np.ndarray | None:
+def estimate_rings(
+    points: np.ndarray, gap_deg: float = 0.4, beams: int | None = None
+) -> np.ndarray | None:
     """Ring of every point (0 = lowest) from gaps between its sorted elevations, or None when
     that finds no plausible beam structure (under 2 or over 256 beams, or beams of under 20
-    points on average)."""
+    points on average).
+
+    Parameters
+    ----------
+    points : (N, 3) xyz, metres.
+    gap_deg : a gap wider than this (degrees) between neighbouring elevations starts a beam.
+    beams : the number of beams when known (the ``rows`` reader option): the ``beams - 1``
+        widest gaps separate them then, ``gap_deg`` is not used.
+    """
     xyz = points.astype(np.float64)
     el = np.degrees(np.arctan2(xyz[:, 2], np.hypot(xyz[:, 0], xyz[:, 1])))
     order = np.argsort(el)
-    gaps = np.diff(el[order]) > gap_deg
+    diff = np.diff(el[order])
+    if beams is not None:
+        if beams < 1 or beams > diff.size + 1:
+            return None
+        gaps = np.zeros(diff.size, dtype=bool)
+        gaps[np.argsort(diff, kind="stable")[diff.size - beams + 1 :]] = True
+    else:
+        gaps = diff > gap_deg
     ring_sorted = np.concatenate([[0], np.cumsum(gaps)])
     n = int(ring_sorted[-1]) + 1 if ring_sorted.size else 0
-    if n < 2 or n > 256 or points.shape[0] / n < 20:
+    if beams is None and (n < 2 or n > 256 or points.shape[0] / n < 20):
         return None
     ring = np.empty(points.shape[0], dtype=np.int64)
     ring[order] = ring_sorted
@@ -124,6 +145,8 @@ def cloud_geometry(
     name: str,
     source: str,
     beams: int | None = None,
+    columns: int | None = None,
+    rows: int | None = None,
 ) -> CloudGeometry:
     """Rows, columns and the sensor model of a cloud (see the module docs).
 
@@ -134,19 +157,27 @@ def cloud_geometry(
     azimuth : (N,) azimuth field (any unit, detected) or None (the points' azimuth then).
     name, source : the sensor's name and the file it came from (for the notes).
     beams : the sensor's beam count when known (rings without points then still get a row).
+    columns : columns per revolution W (the ``columns`` reader option); None = estimated from
+        the median azimuth step (:func:`estimate_width`).
+    rows : beams of a cloud without ring field (the ``rows`` reader option); None = estimated
+        from gaps in the elevations (:func:`estimate_rings`).
     """
     xyz = points.astype(np.float64)
     atan_az = np.arctan2(xyz[:, 1], xyz[:, 0])
     notes = []
     if ring is None:
-        est = estimate_rings(points)
+        est = estimate_rings(points, beams=rows)
         if est is None:
             raise FlicInputError(
-                source, "has no ring field, and no beam structure shows in its elevations"
+                source,
+                "has no ring field, and no beam structure shows in its elevations"
+                if rows is None
+                else f"has fewer distinct elevations than the {rows} rows asked for",
             )
         ring_rank, elevation = _rank_rings(points, est)
         angles_from = "estimated"
-        notes.append(f"rows: {elevation.size} beams estimated from gaps in the elevations")
+        how = "the widest gaps" if rows is not None else "gaps"
+        notes.append(f"rows: {elevation.size} beams, split at {how} in the elevations")
     else:
         ring = np.asarray(ring, dtype=np.int64)
         ids = np.unique(ring)
@@ -177,8 +208,8 @@ def cloud_geometry(
     else:
         az = atan_az
         notes.append("columns from the points' azimuth atan2(y, x)")
-    width = estimate_width(az, ring_rank)
-    columns = azimuth_columns(az, width)
+    width = estimate_width(az, ring_rank) if columns is None else int(columns)
+    column = azimuth_columns(az, width)
     h = elevation.size
     model = SensorModel(
         name=name,
@@ -186,10 +217,10 @@ def cloud_geometry(
         azimuth_offset=np.zeros(h),
         columns=width,
         angles_from=angles_from,
-        columns_from="the median azimuth step (estimated)",
+        columns_from="the median azimuth step (estimated)" if columns is None else "--columns",
         notes=tuple(notes),
     )
-    return CloudGeometry(ring_rank, columns, width, elevation, model)
+    return CloudGeometry(ring_rank, column, width, elevation, model)
 
 
 def organised_geometry(
@@ -237,47 +268,104 @@ def organised_geometry(
     return CloudGeometry(np.asarray(ring, dtype=np.int64), column, width, elevation, model)
 
 
-def read_pcd(path: str | Path) -> np.ndarray:
-    """The points of a PCD file as a structured array (pypcd4); see :func:`read_pcd_shape`.
+def read_pcd(path: str | Path, fields: tuple[str, ...] | None = None) -> np.ndarray:
+    """The points of a PCD file as a structured array; see :func:`read_pcd_shape`."""
+    return read_pcd_shape(path, fields)[0]
+
+
+def read_pcd_shape(
+    path: str | Path, fields: tuple[str, ...] | None = None
+) -> tuple[np.ndarray, int, int]:
+    """``(points, width, height)`` of a PCD file: the structured array and the header's WIDTH
+    and HEIGHT (an organised cloud has HEIGHT > 1: one row per beam).
+
+    pypcd4 parses the header and reads binary and binary_compressed data. An ASCII data section
+    is parsed by pandas' C reader instead (pypcd4 uses ``numpy.loadtxt``, several times
+    slower), and only the ``fields`` asked for are converted.
+
+    Parameters
+    ----------
+    path : the file.
+    fields : the fields needed (of an ASCII section only those are parsed and returned;
+        binary data comes whole); None = all.
 
     Raises
     ------
     FlicInputError
-        When pypcd4 cannot read it or it has no x, y, z fields.
-    """
-    return read_pcd_shape(path)[0]
-
-
-def read_pcd_shape(path: str | Path) -> tuple[np.ndarray, int, int]:
-    """``(points, width, height)`` of a PCD file: the structured array (pypcd4) and the header's
-    WIDTH and HEIGHT (an organised cloud has HEIGHT > 1: one row per beam).
-
-    Raises
-    ------
-    FlicInputError
-        When pypcd4 cannot read it or it has no x, y, z fields.
+        When it cannot be read, holds fewer points than its header says (ASCII), or has no
+        x, y, z fields.
     """
     try:
-        from pypcd4 import PointCloud
+        from pypcd4 import MetaData, PointCloud
     except ImportError:  # pragma: no cover - a core dependency
         raise FlicInputError(path, "reading PCD needs pypcd4 (pip install pypcd4)") from None
     try:
-        cloud = PointCloud.from_path(str(path))
-        data = cloud.pc_data
-        width, height = int(cloud.metadata.width), int(cloud.metadata.height)
-    except Exception as exc:  # noqa: BLE001 - pypcd4 raises many kinds on bad files
+        with open(path, "rb") as fp:
+            meta = MetaData.parse_header(_header_lines(fp))
+            names = meta.build_dtype().names or ()
+            missing = [c for c in "xyz" if c not in names]
+            if missing:
+                raise FlicInputError(
+                    path,
+                    f"has no {'/'.join(missing)} field (fields: {', '.join(names) or 'none'}): "
+                    "a PCD needs x, y and z",
+                )
+            if meta.data.value == "ascii":
+                data = _ascii_data(fp, meta, fields, path)
+            else:
+                fp.seek(0)
+                data = PointCloud.from_fileobj(fp).pc_data
+    except FlicInputError:
+        raise
+    except Exception as exc:  # noqa: BLE001 - pypcd4 and pandas raise many kinds on bad files
         raise FlicInputError(
             path, f"is not a readable PCD file ({type(exc).__name__}: {exc})"
         ) from None
-    names = data.dtype.names or ()
-    missing = [c for c in "xyz" if c not in names]
-    if missing:
+    return data, int(meta.width), int(meta.height)
+
+
+def _header_lines(fp) -> list[str]:  # noqa: ANN001
+    """The header lines of a PCD file, as pypcd4's ``PointCloud.from_fileobj`` collects them
+    (comments and blank lines skipped, up to DATA), leaving ``fp`` at the data section."""
+    lines: list[str] = []
+    for raw in fp:
+        line = raw.decode("utf-8").strip()
+        if line.startswith("#") or not line:
+            continue
+        lines.append(line)
+        if line.startswith("DATA") or len(lines) >= 10:
+            break
+    return lines
+
+
+def _ascii_data(fp, meta, fields: tuple[str, ...] | None, path: object) -> np.ndarray:  # noqa: ANN001
+    """An ASCII data section (one point per line, values separated by spaces) read by pandas'
+    C parser: the requested fields as a structured array of the header's types."""
+    import pandas as pd
+
+    dtype = meta.build_dtype()
+    names = list(dtype.names)
+    wanted = names if fields is None else [n for n in names if n in fields]
+    if meta.points == 0:
+        return np.empty(0, [(n, dtype[n]) for n in wanted])
+    start = fp.tell()
+    first = fp.readline().rstrip(b"\r\n").split(b" ")
+    fp.seek(start)
+    # one space between values (as PCL writes them) is pandas' fast path; other spacing is
+    # parsed as any whitespace (three times slower here)
+    single = len(first) == len(names) and all(first)
+    frame = pd.read_csv(
+        fp, sep=" " if single else r"\s+", header=None, names=names, usecols=wanted,
+        nrows=meta.points, dtype={n: dtype[n] for n in wanted}, engine="c",
+    )  # fmt: skip
+    if len(frame) != meta.points:
         raise FlicInputError(
-            path,
-            f"has no {'/'.join(missing)} field (fields: {', '.join(names) or 'none'}): a PCD "
-            "needs x, y and z",
+            path, f"holds {len(frame):,} of the {meta.points:,} points its header declares"
         )
-    return data, width, height
+    out = np.empty(len(frame), [(n, dtype[n]) for n in wanted])
+    for n in wanted:
+        out[n] = frame[n].to_numpy()
+    return out
 
 
 def kept_points(xyz: np.ndarray, min_range: float = 0.0) -> np.ndarray:
@@ -301,12 +389,19 @@ class PcdDataset(SensorFileDataset):
 
     format = FORMAT
     suffixes = (".pcd",)
+    reader_options = ("columns", "rows")
 
     def _open(self, path: Path) -> FileInfo:
         data, width, height = read_pcd_shape(path)
         xyz = np.stack([data["x"], data["y"], data["z"]], axis=1).astype(np.float32)
         keep = kept_points(xyz)
         if 1 < height <= 1024 and width > 1 and width * height == xyz.shape[0] and keep.any():
+            asked = (self.options.get("rows"), self.options.get("columns"))
+            if asked[0] not in (None, height) or asked[1] not in (None, width):
+                raise FlicInputError(
+                    path, f"is an organised cloud of {height} x {width} (HEIGHT x WIDTH): "
+                    "--rows / --columns cannot change that",
+                )  # fmt: skip
             geo = organised_geometry(xyz[keep], keep, width, height, f"PCD ({path.name})")
             state = _PcdState(None if keep.all() else keep, geo)
             return FileInfo(path, 1, geo.model, np.array([int(keep.sum())]), [], state)
@@ -314,8 +409,14 @@ class PcdDataset(SensorFileDataset):
         ring_name = next((n for n in RING_FIELDS if n in names), None)
         ring = data[ring_name][keep].astype(np.int64) if ring_name else None
         az = data["azimuth"][keep] if "azimuth" in names else None
+        if ring is not None and self.options.get("rows") is not None:
+            raise FlicInputError(
+                path, f"has a ring field ({ring_name!r}): its rows come from it, not --rows"
+            )
         try:
-            geo = cloud_geometry(xyz[keep], ring, az, f"PCD ({path.name})", str(path))
+            geo = cloud_geometry(
+                xyz[keep], ring, az, f"PCD ({path.name})", str(path), **self.options
+            )
         except ValueError as exc:
             raise FlicInputError(path, str(exc)) from None
         if ring_name:
@@ -326,7 +427,7 @@ class PcdDataset(SensorFileDataset):
 
     def _load(self, info: FileInfo, k: int) -> Frame:
         state: _PcdState = info.state  # type: ignore[assignment]
-        data = read_pcd(info.path)
+        data = read_pcd(info.path, ("x", "y", "z"))
         xyz = np.stack([data["x"], data["y"], data["z"]], axis=1).astype(np.float32)
         if state.keep is not None:
             if state.keep.size != xyz.shape[0]:

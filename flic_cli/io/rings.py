@@ -55,15 +55,25 @@ def ring_image(
     pixel gives its range and height (``point_z``), ``counts`` the points per pixel.
     """
     xyz = np.ascontiguousarray(points[:, :3])
-    h = int(np.asarray(elevation).size)
-    ranges, counts, pix, z = _ring_pixels(
-        xyz,
-        np.ascontiguousarray(ring, dtype=np.int64),
-        np.ascontiguousarray(column, dtype=np.int64),
-        h,
-        int(width),
+    ring = np.ascontiguousarray(ring, dtype=np.int64)
+    column = np.ascontiguousarray(column, dtype=np.int64)
+    ranges, counts, pix, z = nearest_pixels(
+        xyz, ring, column, np.asarray(elevation).size, int(width), 0
     )
-    shape = (h, int(width))
+    return pixel_image(ranges, counts, pix, z, elevation, int(width))
+
+
+def pixel_image(
+    ranges: np.ndarray,
+    counts: np.ndarray,
+    pix: np.ndarray,
+    z: np.ndarray,
+    elevation: np.ndarray,
+    width: int,
+) -> RangeImage:
+    """The RangeImage of :func:`nearest_pixels`' flat arrays (H = ``elevation.size`` rows of
+    ``width``): ``projection == "rings"``, every point with a pixel."""
+    shape = (int(np.asarray(elevation).size), int(width))
     return RangeImage(
         ranges.reshape(shape),
         np.asarray(elevation, dtype=np.float64),
@@ -77,10 +87,14 @@ def ring_image(
 
 
 @njit(cache=True)
-def _ring_pixels(
-    xyz: np.ndarray, ring: np.ndarray, column: np.ndarray, h: int, w: int
+def nearest_pixels(
+    xyz: np.ndarray, ring: np.ndarray, column: np.ndarray, h: int, w: int, shift: int
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Flat (H * W) ranges (m, float32, 0 = none), counts and heights (m) of the points'
+    pixels, and (N,) the pixel of every point: row ``h - 1 - ring``, column ``(column +
+    shift) mod w`` (``0 <= column < w``); the nearest point of a pixel gives its range."""
     n = xyz.shape[0]
+    shift = shift % w
     ranges = np.zeros(h * w, dtype=np.float32)
     counts = np.zeros(h * w, dtype=np.int32)
     z = np.zeros(h * w, dtype=np.float32)
@@ -90,7 +104,10 @@ def _ring_pixels(
         y = np.float64(xyz[i, 1])
         zz = np.float64(xyz[i, 2])
         r = np.float32(np.sqrt(x * x + y * y + zz * zz))
-        p = (h - 1 - ring[i]) * w + column[i]
+        c = column[i] + shift
+        if c >= w:
+            c -= w
+        p = (h - 1 - ring[i]) * w + c
         if ranges[p] == 0.0 or r < ranges[p]:
             ranges[p] = r
             z[p] = np.float32(zz)

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -74,6 +75,45 @@ class SensorModel:
         return out
 
 
+#: Reader options a format may take (``flic info / segment / benchmark --columns / --rows``):
+#: what they mean, for the error that names a format that does not take one.
+READER_OPTIONS = {
+    "columns": "columns per revolution W of a cloud without firing index (PCD)",
+    "rows": "beams of a cloud without ring field (PCD)",
+    "return": "the return read of a dual-return profile, 1 or 2 (Ouster pcap)",
+    "calibration": "a velodyne-decoder calibration file (Velodyne pcap; an HDL-64E needs one)",
+}
+
+
+def check_reader_options(
+    path: Path, fmt: str, accepted: tuple[str, ...], options: dict[str, Any]
+) -> dict[str, Any]:
+    """The reader options given (None values dropped), checked: known, taken by the format,
+    integers of at least 1 (columns at least 8), a calibration an existing file.
+
+    Raises
+    ------
+    FlicInputError
+        Naming the option and the formats that take it.
+    """
+    given = {k: v for k, v in options.items() if v is not None}
+    for key, value in given.items():
+        if key not in READER_OPTIONS:
+            raise FlicInputError(path, f"unknown reader option {key!r}")
+        if key not in accepted:
+            raise FlicInputError(
+                path, f"--{key} ({READER_OPTIONS[key]}) does not apply to {fmt} data"
+            )
+        if key == "calibration":
+            if not Path(value).is_file():
+                raise FlicInputError(value, "(--calibration) is no file")
+            continue
+        low = 8 if key == "columns" else 1
+        if isinstance(value, bool) or not isinstance(value, int) or value < low:
+            raise FlicInputError(path, f"--{key} must be an integer >= {low}, not {value!r}")
+    return given
+
+
 @dataclass
 class FileInfo:
     """What a sensor reader found in one recording (for ``refs`` and ``flic info``).
@@ -112,6 +152,8 @@ class SensorFileDataset:
 
     format = ""
     suffixes: tuple[str, ...] = ()
+    #: The reader options (:data:`READER_OPTIONS`) this format takes.
+    reader_options: tuple[str, ...] = ()
     #: ``flic segment --semantics`` is for SemanticKITTI scans (its oracle reads ``.label``
     #: files); the sensor formats' predictions carry cluster ids only.
     point_semantics = False
@@ -122,10 +164,12 @@ class SensorFileDataset:
         sequences: list[str] | None = None,
         frames: tuple[int | None, int | None] | None = None,
         require_labels: bool = False,
+        **options: Any,
     ) -> None:
         from flic_cli.io.base import FrameRef, frames_text, in_frames, select_sequences
 
         self.root = Path(root)
+        self.options = check_reader_options(self.root, self.format, self.reader_options, options)
         files = self._files(self.root)
         if not files:
             raise FlicInputError(self.root, f"holds no {self.format} recording")

@@ -429,7 +429,9 @@ def run_benchmark(spec: BenchmarkRun) -> BenchmarkResult:
     if clash:
         raise FlicInputError(None, f"method name {clash[0]!r} is reserved for a timed stage")
     methods = list(dict.fromkeys(methods))
-    ds = open_dataset(data, sel.sequences, sel.frames, require_labels=setting == "no-ground")
+    ds = open_dataset(
+        data, sel.sequences, sel.frames, require_labels=setting == "no-ground", reader=sel.reader
+    )
     refs = ds.refs()
     out = check_output_dir(Path(out), ds.folders())
     segs = build_segmenters(config, methods, setting, ground_remover)

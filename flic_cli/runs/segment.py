@@ -179,6 +179,7 @@ def run_segment(spec: SegmentRun) -> SegmentSummary:
         sel.sequences,
         sel.frames,
         require_labels=setting == "no-ground" or wanted == "oracle",
+        reader=sel.reader,
     )
     if wanted is not None and not ds.point_semantics:
         raise FlicInputError(

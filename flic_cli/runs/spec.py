@@ -47,6 +47,8 @@ class Selection:
         always times in one process.
     skip_bad : go on past frames whose input is bad (listed in ``skipped.csv``).
     progress : show a progress bar.
+    reader : reader options (``{"columns": W, "rows": H}``, see
+        :data:`flic_cli.io.sensor.READER_OPTIONS`); None = none.
     """
 
     data: Path
@@ -58,6 +60,7 @@ class Selection:
     jobs: int = 1
     skip_bad: bool = False
     progress: bool = True
+    reader: dict[str, object] | None = None
 
     def setting_or(self, default: str) -> str:
         """:attr:`setting`, or the command's ``default`` when None."""

@@ -3,7 +3,8 @@
     python scripts/sensors/check_formats.py --out results/sensors/formats_check.csv
 
 For each recording of ../shared/data/sensors (Ouster, Velodyne, PCD, nuScenes) and each method
-variant of the default config: the frame's points as stored, the labels returned (must be one
+variant the config runs by default (``--methods all``: every variant but the per-class ALPINE
+ones, which need semantic classes): the frame's points as stored, the labels returned (must be one
 per point), clusters, and the seconds the call took (first call per method includes numba's
 cache load; the machine was shared, so these are no benchmark).
 """
@@ -16,27 +17,29 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
+from recordings import RECORDINGS, ROOT, SENSORS  # scripts/sensors/recordings.py
 
 import flic_cli.api as flic
-
-ROOT = Path(__file__).resolve().parents[2]
-SENSORS = ROOT.parent / "shared" / "data" / "sensors"
-RECORDINGS = [
-    "ouster/OS-2-128-U1_v2.3.0_1024x10.pcap",
-    "ouster/OS-1-64_1024x10_fw20.pcap",
-    "velodyne/vlp16_velodyne_example.pcap",
-    "pcd/robosense_helios16p_1691031766781547066.pcd",
-    "velodyne/nebula_vlp16/1673400472138016708.pcd",
-    "nuscenes/n015-2018-07-24-11-22-45+0800__LIDAR_TOP__1532402927647951.pcd.bin",
-]
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--out", type=Path, default=ROOT / "results/sensors/formats_check.csv")
-    parser.add_argument("--methods", default=None, help="comma-separated; default: all")
+    parser.add_argument(
+        "--methods",
+        default=None,
+        help="comma-separated, or `all`; default: the config's default_methods (those `flic "
+        "evaluate` runs)",
+    )
     args = parser.parse_args()
-    methods = args.methods.split(",") if args.methods else flic.methods()
+    if args.methods == "all":  # per-class ALPINE needs semantic classes: a recording has none
+        methods = [m for m in flic.methods() if m not in ("alpine", "alpine-k32")]
+    elif args.methods:
+        methods = args.methods.split(",")
+    else:
+        from flic_cli.config import load_config
+
+        methods = list(load_config().default_methods)
     rows = []
     for rec in RECORDINGS:
         frame = flic.load_frame(SENSORS / rec)

@@ -1,4 +1,5 @@
-"""Reading + range image per shared sensor recording: median of many repeats on one core.
+"""Reading + range image per shared sensor recording (and the nuScenes sweep of 34,688 points
+written as a PCD in each encoding): median of many repeats on one core.
 
     python scripts/sensors/read_timing.py --repeat 200 --out results/sensors/read_timing.csv
 
@@ -14,25 +15,24 @@ from __future__ import annotations
 
 import argparse
 import os
+import tempfile
 import time
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
+from recordings import RECORDINGS, ROOT, SENSORS  # scripts/sensors/recordings.py
 
 from flic_cli.io import open_dataset
 
-ROOT = Path(__file__).resolve().parents[2]
-SENSORS = ROOT.parent / "shared" / "data" / "sensors"
 
-
-def _peer(rec: str):  # noqa: ANN202
-    path = SENSORS / rec
+def _peer(path: Path):  # noqa: ANN202
+    rec = str(path)
     if rec.endswith(".pcap") and "velodyne" in rec:
         import velodyne_decoder as vd
 
         cfg = vd.Config(model=vd.Model.VLP16)
-        return "velodyne_decoder.read_pcap (whole file)", lambda: list(vd.read_pcap(str(path), cfg))
+        return "velodyne_decoder.read_pcap (whole file)", lambda: list(vd.read_pcap(rec, cfg))
     if rec.endswith(".pcap"):
         from flic_cli.io.pcap import index_udp
 
@@ -40,18 +40,37 @@ def _peer(rec: str):  # noqa: ANN202
     if rec.endswith(".pcd"):
         from pypcd4 import PointCloud
 
-        return "pypcd4 PointCloud.from_path", lambda: PointCloud.from_path(str(path)).pc_data
+        return "pypcd4 PointCloud.from_path", lambda: PointCloud.from_path(rec).pc_data
     return "numpy.fromfile", lambda: np.fromfile(path, dtype="<f4")
 
 
-RECORDINGS = [
-    "ouster/OS-2-128-U1_v2.3.0_1024x10.pcap",
-    "ouster/OS-1-64_1024x10_fw20.pcap",
-    "velodyne/vlp16_velodyne_example.pcap",
-    "pcd/robosense_helios16p_1691031766781547066.pcd",
-    "velodyne/nebula_vlp16/1673400472138016708.pcd",
-    "nuscenes/n015-2018-07-24-11-22-45+0800__LIDAR_TOP__1532402927647951.pcd.bin",
-]
+def _encoding(path: Path) -> str:
+    """What the reader parses: a PCD's DATA encoding, raw float32, or packets."""
+    if path.suffix == ".pcd":
+        with open(path, "rb") as f:
+            for line in f:
+                if line.startswith(b"DATA"):
+                    return line.split()[1].decode()
+    return "float32 records" if path.name.endswith(".pcd.bin") else "UDP packets"
+
+
+def _pcd_copies(folder: Path) -> list[tuple[str, Path]]:
+    """The nuScenes sweep (34,688 points: x y z intensity ring) written as a PCD in each of the
+    three encodings, for the target's "PCD of 35k points"."""
+    from pypcd4 import Encoding, PointCloud
+
+    pts = np.fromfile(SENSORS / RECORDINGS[-1], dtype="<f4").reshape(-1, 5)
+    cloud = PointCloud.from_points(
+        [pts[:, 0], pts[:, 1], pts[:, 2], pts[:, 3], pts[:, 4].astype(np.uint16)],
+        ("x", "y", "z", "intensity", "ring"),
+        (np.float32, np.float32, np.float32, np.float32, np.uint16),
+    )
+    out = []
+    for enc in (Encoding.ASCII, Encoding.BINARY, Encoding.BINARY_COMPRESSED):
+        path = folder / f"nuscenes_sweep_{enc.value}.pcd"
+        cloud.save(path, encoding=enc)
+        out.append((f"(nuScenes sweep as {enc.value} PCD)", path))
+    return out
 
 
 def main() -> None:
@@ -62,38 +81,41 @@ def main() -> None:
     args = parser.parse_args()
     os.sched_setaffinity(0, {args.core})
     rows = []
-    for rec in RECORDINGS:
-        ds = open_dataset(SENSORS / rec)
-        ref = ds.refs()[0]
-        frame = ds.load(ref)  # warm-up (numba cache load, LUTs)
-        peer_name, peer = _peer(rec)
-        peer()
-        ours, theirs = [], []
-        for _ in range(args.repeat):  # interleaved: both see the same machine load
-            t = time.perf_counter()
-            ds.load(ref)
-            ours.append(time.perf_counter() - t)
-            t = time.perf_counter()
+    with tempfile.TemporaryDirectory() as tmp:
+        inputs = [(rec, SENSORS / rec) for rec in RECORDINGS] + _pcd_copies(Path(tmp))
+        for rec, path in inputs:
+            ds = open_dataset(path)
+            ref = ds.refs()[0]
+            frame = ds.load(ref)  # warm-up (numba cache load, LUTs)
+            peer_name, peer = _peer(path)
             peer()
-            theirs.append(time.perf_counter() - t)
-        rows.append(
-            {
-                "recording": rec,
-                "format": ds.format,
-                "image": "x".join(map(str, frame.image.shape)),
-                "points": frame.points.shape[0],
-                "load_ms_min": round(1e3 * float(np.min(ours)), 3),
-                "load_ms_median": round(1e3 * float(np.median(ours)), 3),
-                "load_ms_p10": round(1e3 * float(np.percentile(ours, 10)), 3),
-                "load_ms_p90": round(1e3 * float(np.percentile(ours, 90)), 3),
-                "peer": peer_name,
-                "peer_ms_min": round(1e3 * float(np.min(theirs)), 3),
-                "peer_ms_median": round(1e3 * float(np.median(theirs)), 3),
-                "load_average_1min": round(os.getloadavg()[0], 1),
-                "repeats": args.repeat,
-            }
-        )
-        print(rows[-1], flush=True)
+            ours, theirs = [], []
+            for _ in range(args.repeat):  # interleaved: both see the same machine load
+                t = time.perf_counter()
+                ds.load(ref)
+                ours.append(time.perf_counter() - t)
+                t = time.perf_counter()
+                peer()
+                theirs.append(time.perf_counter() - t)
+            rows.append(
+                {
+                    "recording": rec,
+                    "format": ds.format,
+                    "encoding": _encoding(path),
+                    "image": "x".join(map(str, frame.image.shape)),
+                    "points": frame.points.shape[0],
+                    "load_ms_min": round(1e3 * float(np.min(ours)), 3),
+                    "load_ms_median": round(1e3 * float(np.median(ours)), 3),
+                    "load_ms_p10": round(1e3 * float(np.percentile(ours, 10)), 3),
+                    "load_ms_p90": round(1e3 * float(np.percentile(ours, 90)), 3),
+                    "peer": peer_name,
+                    "peer_ms_min": round(1e3 * float(np.min(theirs)), 3),
+                    "peer_ms_median": round(1e3 * float(np.median(theirs)), 3),
+                    "load_average_1min": round(os.getloadavg()[0], 1),
+                    "repeats": args.repeat,
+                }
+            )
+            print(rows[-1], flush=True)
     args.out.parent.mkdir(parents=True, exist_ok=True)
     pd.DataFrame(rows).to_csv(args.out, index=False)
 
