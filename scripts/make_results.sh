@@ -156,6 +156,11 @@ for step in $STEPS; do
       python scripts/benchmark_revisions.py "${BEFORE:-3e00d28}" "${AFTER:-HEAD}" --data "$data" \
         --rounds 6 --cpu "${CPU:-1}" --work "$TMP/revisions" --out "results/benchmark/revisions/$name"
     done
+    # the A/A control: the later revision against itself, how far the machine alone moves a ratio
+    fresh results/benchmark/revisions/synthetic-moosmann-aa
+    python scripts/benchmark_revisions.py "${AFTER:-HEAD}" "${AFTER:-HEAD}" --data "$L200/moosmann" \
+      --rounds 4 --cpu "${CPU:-1}" --work "$TMP/revisions" \
+      --out results/benchmark/revisions/synthetic-moosmann-aa
     ;;
   evaluate)
     # Table 1 (both settings, the paper's ground extraction), panoptic quality with oracle
