@@ -156,6 +156,12 @@ for step in $STEPS; do
       python scripts/benchmark_revisions.py "${BEFORE:-3e00d28}" "${AFTER:-HEAD}" --data "$data" \
         --rounds 6 --cpu "${CPU:-1}" --work "$TMP/revisions" --out "results/benchmark/revisions/$name"
     done
+    # clustering alone (the no-ground setting times no remover)
+    fresh results/benchmark/revisions/semantickitti-no-ground
+    python scripts/benchmark_revisions.py "${BEFORE:-3e00d28}" "${AFTER:-HEAD}" --data "$DATA" \
+      --methods bogoslavskyi,flic0,flic6,flic14,flic6n,bridge --extra "--setting no-ground" \
+      --rounds 4 --cpu "${CPU:-1}" --work "$TMP/revisions" \
+      --out results/benchmark/revisions/semantickitti-no-ground
     # the A/A control: the later revision against itself, how far the machine alone moves a ratio
     fresh results/benchmark/revisions/synthetic-moosmann-aa
     python scripts/benchmark_revisions.py "${AFTER:-HEAD}" "${AFTER:-HEAD}" --data "$L200/moosmann" \
