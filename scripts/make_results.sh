@@ -3,11 +3,15 @@
 # results/ground/README.md write next to each file. From the repository root, with ../shared
 # beside it and the dev install active:
 #     . .venv/bin/activate && bash scripts/make_results.sh [step ...]
+#     bash scripts/make_results.sh --list      # the steps: what each remakes, what it needs
 # Steps, in this order (default: all of them):
-#     bench repeats evaluate ground synthetic ground-sweep ground-speed sweeps bridge-grid
-#     coverage labels dbscan pictures profile sensors sensors-synthetic bags peers cpp panoptic
-#     ouster-sdk peers-fidelity
+#     bench repeats revisions evaluate ground synthetic ground-sweep ground-speed sweeps
+#     bridge-grid coverage labels dbscan pictures profile sensors sensors-synthetic bags peers cpp
+#     panoptic ouster-sdk peers-fidelity
 # The benchmarks come first, on a quiet machine: evaluate and ground take their times from them.
+# Every step's start, end and wall time go to $TMP_RESULTS/steps.log (default
+# /tmp/flic-results/steps.log), one tab-separated line per step: step, start (UTC), seconds,
+# status (done, skipped, failed), so that a later run can be planned from an earlier one.
 # Four steps need something outside the repository; without it they say so and are skipped:
 #     cpp       Bogoslavskyi & Stachniss' own C++: DC=<a PRBonn/depth_clustering checkout>, and
 #               the system packages that scripts/depth_clustering/time_cpp.sh names;
@@ -18,6 +22,8 @@
 #               ouster-sdk installed, outside the project's environment>
 #     peers-fidelity  the field's clusterers against their reference code: FLIC_REF=<the folder
 #               where scripts/peers_fidelity.sh built valeoai/Alpine, CVC, SLR and PCL's Euclidean>
+# revisions makes a git worktree and a venv per revision under $TMP_RESULTS/revisions (pip
+# installs the revision's dependencies, which must be reachable; BEFORE and AFTER name them).
 # ground-sweep and bridge-grid are the longest steps (many evaluations of the 50 frames each).
 # JOBS sets the processes of evaluate and sweep-threshold.
 set -euo pipefail
@@ -30,14 +36,67 @@ KLOG=$TMP/kitti-log           # the 50 shared scans binned to 870 x 64: a log wi
 METHODS=bogoslavskyi,flic0,flic1,flic6,flic14,flic1n,flic6n,flic14n,bridge,dbscan
 PEERS=flic0-scipy,flic14-scipy
 GROUND_METHODS=flic0,flic1,flic6,flic14,flic1n,flic6n,flic14n,bridge,dbscan-fast
-DEFAULT="bench repeats evaluate ground synthetic ground-sweep ground-speed sweeps bridge-grid"
+DEFAULT="bench repeats revisions evaluate ground synthetic ground-sweep ground-speed sweeps bridge-grid"
 DEFAULT="$DEFAULT coverage labels dbscan pictures profile sensors sensors-synthetic bags peers cpp"
 DEFAULT="$DEFAULT panoptic ouster-sdk peers-fidelity"
 SENSORS=../shared/data/sensors
+# step, what it remakes, what it needs besides ../shared and the dev install (the wall time of
+# each step is measured into steps.log, not guessed here)
+list_steps() {
+  cat <<'LIST'
+bench             results/benchmark/{synthetic-moosmann,kitti-as-moosmann,semantickitti}*    quiet machine
+repeats           results/benchmark/repeats/                                               quiet machine
+revisions         results/benchmark/revisions/ (BEFORE=3e00d28 against AFTER=HEAD)         network or pip cache
+evaluate          results/evaluate/                                                        -
+ground            results/ground/{evaluate-*,table,gap_intervals_column,oracle*,losses_*,pixel_heights,ground_masks*}  -
+synthetic         results/ground/evaluate-column-synthetic-seed7/, gap_intervals_column_synthetic_seed7.csv  -
+ground-sweep      results/ground/sweep_column*.csv                                         -
+ground-speed      results/ground/speed_per_point_*.csv                                     quiet machine
+sweeps            results/sweep/{flic0,flic1-map,flic1-neighbour,bogoslavskyi,dbscan,bridge-default}/  -
+bridge-grid       results/sweep/bridge/{kitti,sample0,sample1}/                            -
+coverage          results/projection_coverage.csv                                          -
+labels            results/labels/fingerprint.csv                                           -
+dbscan            results/dbscan-backends/                                                 -
+pictures          results/segment/                                                         -
+profile           results/profile/                                                         quiet machine
+sensors           results/sensors/ (but ouster_sdk_comparison.csv)                         ../shared/data/sensors
+sensors-synthetic results/sensors-synthetic/                                               -
+bags              results/bags/                                                            -
+peers             results/peers/{evaluate,which_clusterer,sweeps}/                         -
+cpp               results/benchmark/cpp-comparison*/, results/ground/bogoslavskyi_fidelity*.csv  DC=depth_clustering
+panoptic          results/panoptic/ (but README.md)                                        SKAPI=semantic-kitti-api
+ouster-sdk        results/sensors/ouster_sdk_comparison.csv                                OUSTER_PY=python with ouster-sdk
+peers-fidelity    results/peers/fidelity/                                                  FLIC_REF=built references
+LIST
+}
+if [ "${1:-}" = "--list" ]; then
+  list_steps
+  exit 0
+fi
 STEPS=${*:-$DEFAULT}
 mkdir -p "$TMP"
+STEPLOG=$TMP/steps.log
+
+# step_log STATUS: one line per step into $STEPLOG (step, start UTC, seconds, status)
+step_log() {
+  printf '%s\t%s\t%s\t%s\n' "$step" "$(date -u -d "@$t0" +%FT%TZ)" "$(($(date +%s) - t0))" "$1" \
+    >> "$STEPLOG"
+}
+skip() {  # skip REASON: a step whose outside requirement is missing
+  echo "step $step skipped: $1" >&2
+  step_log skipped
+}
+trap 'step_log "failed (exit $?)"' ERR
 
 fresh() { rm -rf "$1"; }  # an output folder is rewritten whole (no stale files)
+keep() {  # keep DIR FILE...: remove every other file a command wrote into DIR (nothing cites it)
+  local dir=$1 f name
+  shift
+  for f in "$dir"/*; do
+    name=${f##*/}
+    [[ " $* " == *" $name "* ]] || rm -rf "$f"
+  done
+}
 synthetic_log() { test -d "$LOG/moosmann" || flic sample "$LOG" --frames 500; }
 kitti_log() { test -d "$KLOG" || python scripts/kitti_as_moosmann.py "$DATA" "$KLOG"; }
 sample() {  # sample FOLDER FRAMES SEED
@@ -46,6 +105,7 @@ sample() {  # sample FOLDER FRAMES SEED
 
 for step in $STEPS; do
   echo "== make_results: $step" >&2
+  t0=$(date +%s)
   case $step in
   bench)
     # runtimes (paper Fig. 9, 10): results/README.md section 3
@@ -84,6 +144,29 @@ for step in $STEPS; do
       cp "$tmp/summary.csv" "$tmp/environment.json" "results/benchmark/repeats/$name/"
       rm -rf "$tmp"
     done
+    ;;
+  revisions)
+    # flic benchmark of two revisions, alternating round by round on one core, on the synthetic
+    # 200-frame log and the 50 shared frames: results/benchmark/revisions/README.md
+    L200=$TMP/log-200
+    test -d "$L200/moosmann" || flic sample "$L200" --frames 200
+    for set in "synthetic-moosmann:$L200/moosmann" "semantickitti:$DATA"; do
+      name=${set%%:*} data=${set#*:}
+      fresh "results/benchmark/revisions/$name"
+      python scripts/benchmark_revisions.py "${BEFORE:-3e00d28}" "${AFTER:-HEAD}" --data "$data" \
+        --rounds 6 --cpu "${CPU:-1}" --work "$TMP/revisions" --out "results/benchmark/revisions/$name"
+    done
+    # clustering alone (the no-ground setting times no remover)
+    fresh results/benchmark/revisions/semantickitti-no-ground
+    python scripts/benchmark_revisions.py "${BEFORE:-3e00d28}" "${AFTER:-HEAD}" --data "$DATA" \
+      --methods bogoslavskyi,flic0,flic6,flic14,flic6n,bridge --extra "--setting no-ground" \
+      --rounds 4 --cpu "${CPU:-1}" --work "$TMP/revisions" \
+      --out results/benchmark/revisions/semantickitti-no-ground
+    # the A/A control: the later revision against itself, how far the machine alone moves a ratio
+    fresh results/benchmark/revisions/synthetic-moosmann-aa
+    python scripts/benchmark_revisions.py "${AFTER:-HEAD}" "${AFTER:-HEAD}" --data "$L200/moosmann" \
+      --rounds 4 --cpu "${CPU:-1}" --work "$TMP/revisions" \
+      --out results/benchmark/revisions/synthetic-moosmann-aa
     ;;
   evaluate)
     # Table 1 (both settings, the paper's ground extraction), panoptic quality with oracle
@@ -132,7 +215,7 @@ for step in $STEPS; do
     python scripts/paired_differences.py "$out" --settings \
       --out results/ground/gap_intervals_column_synthetic_seed7.csv
     # summaries only (the per-object and per-frame tables of 60 synthetic frames are large)
-    rm -rf "$out/parts" "$out/per_object.csv" "$out/per_frame.csv"
+    keep "$out" by_class.csv ground.csv per_setting.csv table.csv
     ;;
   ground-sweep)
     # column's parameters, one at a time around the defaults (shared frames + 20 synthetic)
@@ -221,6 +304,7 @@ for step in $STEPS; do
     fresh results/sensors/benchmark_os2_128
     taskset -c 0 flic benchmark "$os2" --methods flic0,flic14,bridge,bogoslavskyi --repeat 50 \
       --rounds 3 --out results/sensors/benchmark_os2_128
+    keep results/sensors/benchmark_os2_128 environment.json frames.csv runtime.png summary.csv
     tmp=$(mktemp -d)
     flic segment "$os2" --method flic14 --render 0 --out "$tmp/seg"
     fresh results/sensors/segment_os2_128
@@ -288,7 +372,7 @@ from bagtools import cycled_vlp16_bag; cycled_vlp16_bag(Path('../shared/data'), 
     ;;
   ouster-sdk)
     if [ -z "${OUSTER_PY:-}" ]; then
-      echo "step ouster-sdk skipped: set OUSTER_PY to a Python with ouster-sdk installed" >&2
+      skip "set OUSTER_PY to a Python with ouster-sdk installed"
       continue
     fi
     python scripts/sensors/ouster_sdk_comparison.py --sdk-python "$OUSTER_PY"
@@ -296,17 +380,20 @@ from bagtools import cycled_vlp16_bag; cycled_vlp16_bag(Path('../shared/data'), 
   peers)
     # the field's clusterers (SLR, CVC, ALPINE, HDBSCAN, Euclidean): docs/peers.md
     ev=results/peers/evaluate
-    for name in main more hdbscan; do fresh "$ev/$name"; done
+    for name in main more alpine-agnostic hdbscan; do fresh "$ev/$name"; done
     flic evaluate "$DATA" --setting no-ground --semantics oracle --jobs "$JOBS" \
       --methods bogoslavskyi,flic0,flic1,flic6,flic14,flic1n,flic6n,flic14n,bridge,dbscan,slr,cvc,alpine,alpine-k32 \
       --out "$ev/main"
     flic evaluate "$DATA" --setting no-ground --semantics oracle --jobs "$JOBS" \
       --methods euclidean,alpine-agnostic --out "$ev/more"
+    # the alpine-agnostic row of which_clusterer, with its preset's width_m 0.45 m
+    flic evaluate "$DATA" --setting no-ground --semantics oracle --jobs "$JOBS" \
+      --methods alpine-agnostic --out "$ev/alpine-agnostic"
     flic evaluate "$DATA" --frames 0:1 --setting no-ground --semantics oracle \
       --methods hdbscan,bridge,dbscan,flic0,euclidean --out "$ev/hdbscan"
-    rm -rf "$ev"/*/parts
-    python scripts/peers_which_clusterer.py results/peers/which_clusterer "$ev/main" "$ev/more" \
-      "$ev/hdbscan"
+    rm -rf "$ev"/*/parts "$ev"/*/run.json
+    python scripts/peers_which_clusterer.py results/peers/which_clusterer "$ev/main" \
+      "$ev/alpine-agnostic" "$ev/more" "$ev/hdbscan"
     # their sweeps: results/peers/sweeps/README.md
     sample "$TMP/sample-seed0" 20 0
     bash scripts/peers_sweeps.sh "$DATA" "$TMP/sample-seed0/semantickitti"
@@ -314,7 +401,7 @@ from bagtools import cycled_vlp16_bag; cycled_vlp16_bag(Path('../shared/data'), 
     ;;
   peers-fidelity)
     if [ -z "${FLIC_REF:-}" ]; then
-      echo "step peers-fidelity skipped: set FLIC_REF to the references built by scripts/peers_fidelity.sh" >&2
+      skip "set FLIC_REF to the references built by scripts/peers_fidelity.sh"
       continue
     fi
     python scripts/peers_fidelity.py "$DATA" results/peers/fidelity
@@ -324,7 +411,7 @@ from bagtools import cycled_vlp16_bag; cycled_vlp16_bag(Path('../shared/data'), 
   cpp)
     # their C++ against flic, alternating in one session, on both logs; their ground masks
     if [ -z "${DC:-}" ]; then
-      echo "step cpp skipped: set DC to a PRBonn/depth_clustering checkout" >&2
+      skip "set DC to a PRBonn/depth_clustering checkout"
       continue
     fi
     synthetic_log
@@ -345,7 +432,7 @@ from bagtools import cycled_vlp16_bag; cycled_vlp16_bag(Path('../shared/data'), 
   panoptic)
     # semantic-kitti-api's evaluate_panoptic.py on flic's predictions: results/panoptic/README.md
     if [ -z "${SKAPI:-}" ]; then
-      echo "step panoptic skipped: set SKAPI to a PRBonn/semantic-kitti-api checkout" >&2
+      skip "set SKAPI to a PRBonn/semantic-kitti-api checkout"
       continue
     fi
     tmp=$(mktemp -d)
@@ -368,4 +455,5 @@ d['split']['valid'] = [0, 1, 3, 4, 8]; yaml.safe_dump(d, open('$tmp/sk.yaml', 'w
     exit 2
     ;;
   esac
+  step_log done
 done
