@@ -59,6 +59,7 @@ class Bogoslavskyi:
             point_weights(image),
             image.point_pixel,
             attached,
+            image.azimuth_offset,
         )
 
 
@@ -69,6 +70,7 @@ def bogoslavskyi_labels(
     min_size: int = Bogoslavskyi.min_size,
     mask: np.ndarray | None = None,
     weights: np.ndarray | None = None,
+    azimuth_offset: np.ndarray | None = None,
 ) -> np.ndarray:
     """Cluster labels by the angle criterion: 4-neighbours (wrapping) join when beta > angle_deg.
 
@@ -83,6 +85,8 @@ def bogoslavskyi_labels(
     min_size : smallest cluster, points (the sum of its pixels' ``weights``).
     mask : pixels to cluster (default: valid ones; a pixel without a range is never clustered).
     weights : (H, W) int, points per pixel (default 1: the minimum size counts pixels).
+    azimuth_offset : (H,) azimuth offset of every row, radians (default zeros; see
+        :func:`flic_cli.methods.flic.flic_labels`).
 
     Returns
     -------
@@ -99,4 +103,5 @@ def bogoslavskyi_labels(
         min_size,
         skip,
         weights,
+        azimuth_offset=azimuth_offset,
     )
