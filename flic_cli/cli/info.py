@@ -50,8 +50,7 @@ def info(
     from flic_cli.io.bag import info_lines, is_bag
 
     path = _data_or_sample(data)
-    seqs, frame_range = _selection(sequences, frames)
-    seqs = [topic] if topic else seqs
+    seqs, frame_range = _selection(sequences, frames, topic)
     if is_bag(path):  # the bag's topics first, then its LiDAR topic like any recording
         lines, chosen = info_lines(path, seqs[0] if seqs else None)
         for line in lines:
