@@ -23,7 +23,6 @@ from flic_cli.methods.engine import (
     attached_input,
     kernel_inputs,
     label_row,
-    node_row,
     number,
     pixel_output,
     point_output,
@@ -304,7 +303,17 @@ def components(
     for r in range(h):
         row = r * w
         d = nodes[row : row + w]
-        node_row(d, node, rf, sf, row, use_skip)
+        if use_skip:
+            for c in range(w):
+                x = rf[row + c]
+                ok = (x > 0) & ~sf[row + c]
+                d[c] = x if ok else np.float32(0.0)
+                node[c] = ok
+        else:
+            for c in range(w):
+                x = rf[row + c]
+                d[c] = x if x > 0 else np.float32(0.0)
+                node[c] = x > 0
         ch = angles[0, r, 2]
         sh = angles[0, r, 3]
         if r > 0:
@@ -436,10 +445,18 @@ def cached_angles(
     return out
 
 
+#: rows -> (rows,) read-only zeros: the azimuth offsets of an image without them
+_NO_OFFSETS: dict[int, np.ndarray] = {}
+
+
 def offset_input(azimuth_offset: np.ndarray | None, h: int) -> np.ndarray:
     """The (H,) contiguous float64 azimuth offsets of the rows (zeros for None); shape checked."""
     if azimuth_offset is None:
-        return np.zeros(h)
+        zeros = _NO_OFFSETS.get(h)
+        if zeros is None:
+            zeros = _NO_OFFSETS[h] = np.zeros(h)
+            zeros.flags.writeable = False
+        return zeros
     offset = np.ascontiguousarray(azimuth_offset, dtype=np.float64)
     if offset.shape != (h,):
         raise ValueError(f"azimuth_offset has shape {offset.shape}, the image {h} rows")

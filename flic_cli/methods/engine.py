@@ -17,9 +17,9 @@ images with the pixel test replaced by an edge test, written so that the per-pix
 branches):
 
 1. The caller computes, in loops that LLVM vectorises, the node ranges of the row (the range
-   where the pixel takes part, 0 elsewhere: no measurement, or left out e.g. as ground;
-   :func:`node_row`) and whether each pixel is linked to its left neighbour and to the one
-   above (the buffers of :func:`run_buffers`).
+   where the pixel takes part, 0 elsewhere: no measurement, or left out e.g. as ground) and
+   whether each pixel is linked to its left neighbour and to the one above (the buffers of
+   :func:`run_buffers`).
 2. :func:`label_row`: a *run* is a maximal stretch of nodes, each linked to its left neighbour.
    Word operations give the runs' first and last pixels, and the pixels whose link upwards must
    merge two labels: the first pixel of a run takes the label above it when linked upwards
@@ -54,7 +54,6 @@ __all__ = [
     "find",
     "kernel_inputs",
     "label_row",
-    "node_row",
     "number",
     "pixel_output",
     "point_output",
@@ -122,31 +121,6 @@ def run_buffers(n: int, w: int) -> tuple:
         ends,
         acc,
     )
-
-
-@njit(cache=True, inline="always")
-def node_row(
-    d: np.ndarray,
-    node: np.ndarray,
-    rf: np.ndarray,
-    sf: np.ndarray,
-    row: int,
-    use_skip: bool,
-) -> None:
-    """Step 1's node ranges of a row: ``d[c]`` the range of pixel ``row + c`` of the flat ranges
-    ``rf`` where it is a node (a range > 0, and ``sf[row + c]`` False when ``use_skip``), else
-    0; ``node[c]`` whether it is one. Branch-free, so that LLVM vectorises it."""
-    if use_skip:
-        for c in range(d.size):
-            x = rf[row + c]
-            ok = (x > 0) & ~sf[row + c]
-            d[c] = x if ok else np.float32(0.0)
-            node[c] = ok
-    else:
-        for c in range(d.size):
-            x = rf[row + c]
-            d[c] = x if x > 0 else np.float32(0.0)
-            node[c] = x > 0
 
 
 @njit(cache=True, inline="always")
