@@ -9,8 +9,7 @@ from pydantic import Field
 from pydantic.dataclasses import dataclass
 
 from flic_cli.component import STRICT
-from flic_cli.methods.base import ground_parts, point_weights
-from flic_cli.methods.connections import ANGLE, run_kernel
+from flic_cli.methods.connections import ANGLE, run_kernel, segment_image
 from flic_cli.methods.flic import cached_sets
 from flic_cli.range_image import RangeImage
 
@@ -46,20 +45,9 @@ class Bogoslavskyi:
     slow: ClassVar[bool] = False
 
     def segment(self, image: RangeImage, points: np.ndarray, ground: Ground | None) -> np.ndarray:
-        left_out, attached = ground_parts(ground)
-        return run_kernel(
-            image.ranges,
-            image.elevation,
-            cached_sets((), "map"),
-            DIRECT,
-            ANGLE,
-            float(np.tan(np.radians(self.angle_deg))),
-            self.min_size,
-            left_out,
-            point_weights(image),
-            image.point_pixel,
-            attached,
-            image.azimuth_offset,
+        param = float(np.tan(np.radians(self.angle_deg)))
+        return segment_image(
+            image, ground, cached_sets(*DIRECT), DIRECT, ANGLE, param, self.min_size
         )
 
 

@@ -13,10 +13,13 @@ the flagged pairs are tested and merged.
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 from numba import njit
 
 from flic_cli.bitwords import pack, trailing_zeros
+from flic_cli.methods.base import ground_parts, point_weights
 from flic_cli.methods.criteria import ANGLE, DISTANCE, angle_edge, distance_edge, edge, ray_angle
 from flic_cli.methods.engine import (
     attach,
@@ -30,6 +33,10 @@ from flic_cli.methods.engine import (
     union,
 )
 
+if TYPE_CHECKING:
+    from flic_cli.ground.base import Ground
+    from flic_cli.range_image import RangeImage
+
 __all__ = [
     "ANGLE",
     "DISTANCE",
@@ -38,6 +45,7 @@ __all__ = [
     "connect",
     "connect_points",
     "run_kernel",
+    "segment_image",
 ]
 
 
@@ -515,3 +523,32 @@ def run_kernel(
     if point_pixel is None:
         return connect(*args)
     return connect_points(np.ascontiguousarray(point_pixel, dtype=np.int64), *args)
+
+
+def segment_image(
+    image: RangeImage,
+    ground: Ground | None,
+    sets: tuple[np.ndarray, np.ndarray, np.ndarray],
+    key: object,
+    criterion: int,
+    param: float,
+    min_size: int,
+) -> np.ndarray:
+    """:func:`run_kernel` on a method's input: (N,) labels of the points of ``image`` (its
+    ranges, row elevations and azimuth offsets, points per pixel), the pixels ``ground`` leaves
+    out skipped and its held pixels attached (:func:`flic_cli.methods.base.ground_parts`)."""
+    left_out, attached = ground_parts(ground)
+    return run_kernel(
+        image.ranges,
+        image.elevation,
+        sets,
+        key,
+        criterion,
+        param,
+        min_size,
+        left_out,
+        point_weights(image),
+        image.point_pixel,
+        attached,
+        image.azimuth_offset,
+    )

@@ -10,8 +10,8 @@ from pydantic import Field, NonNegativeInt, field_validator
 from pydantic.dataclasses import dataclass
 
 from flic_cli.component import STRICT
-from flic_cli.methods.base import ground_parts, point_weights
-from flic_cli.methods.connections import DISTANCE, offset_input, run_kernel
+from flic_cli.methods.base import ground_parts
+from flic_cli.methods.connections import DISTANCE, offset_input, run_kernel, segment_image
 from flic_cli.methods.criteria import ray_angle
 from flic_cli.range_image import RangeImage
 
@@ -135,8 +135,8 @@ class Flic:
         return maps
 
     def segment(self, image: RangeImage, points: np.ndarray, ground: Ground | None) -> np.ndarray:
-        left_out, attached = ground_parts(ground)
         if self.backend == "scipy":
+            left_out, attached = ground_parts(ground)
             mask = image.ranges > 0 if left_out is None else (image.ranges > 0) & ~left_out
             labels = flic_labels_scipy(
                 image.ranges,
@@ -152,20 +152,8 @@ class Flic:
             )
             return image.point_labels(labels)
         key = (maps_key(self.maps), self.mc_mode)
-        return run_kernel(
-            image.ranges,
-            image.elevation,
-            cached_sets(*key),
-            key,
-            DISTANCE,
-            float(self.threshold_m) ** 2,
-            self.min_size,
-            left_out,
-            point_weights(image),
-            image.point_pixel,
-            attached,
-            image.azimuth_offset,
-        )
+        t2 = float(self.threshold_m) ** 2
+        return segment_image(image, ground, cached_sets(*key), key, DISTANCE, t2, self.min_size)
 
 
 def flic_labels_scipy(
