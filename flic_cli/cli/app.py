@@ -103,6 +103,16 @@ MethodOpt = Annotated[
         "[methods.NAME] (`flic config` lists them)."
     ),
 ]
+MethodsOpt = Annotated[
+    str | None,
+    typer.Option(
+        "--methods",
+        "-m",
+        help="Comma-separated method variants, in table order. Default: the config's "
+        "`default_methods` (`flic config` shows them).",
+        show_default=False,
+    ),
+]
 McOpt = Annotated[
     int | None,
     typer.Option(
@@ -221,10 +231,37 @@ def _data_or_sample(data: Path | None, moosmann: bool = False) -> Path:
     return chosen
 
 
-def _selection(sequences: str | None, frames: str | None) -> tuple[Any, Any]:
+def _selection(
+    sequences: str | None, frames: str | None, topic: str | None = None
+) -> tuple[Any, Any]:
+    """The parsed ``--sequences`` (a bag's ``--topic`` takes their place) and ``--frames``."""
     from flic_cli.io import parse_frames, parse_sequences
 
-    return (
-        parse_sequences(sequences) if sequences else None,
-        parse_frames(frames) if frames else None,
-    )
+    seqs = parse_sequences(sequences) if sequences else None
+    return [topic] if topic else seqs, parse_frames(frames) if frames else None
+
+
+def reader_options(
+    columns: int | None, rows: int | None, return_index: int | None, calibration: Path | None
+) -> dict[str, Any]:
+    """The reader options (``--columns``, ``--rows``, ``--return``, ``--calibration``) as
+    :func:`flic_cli.io.open_dataset` takes them."""
+    return {"columns": columns, "rows": rows, "return": return_index, "calibration": calibration}
+
+
+def selection(
+    data: Path | None,
+    sequences: str | None,
+    frames: str | None,
+    topic: str | None = None,
+    *,
+    moosmann: bool = False,
+    **options: Any,
+) -> Any:
+    """The :class:`flic_cli.runs.spec.Selection` of a command's shared options: DATA (or the
+    sample: its Moosmann log when ``moosmann``), ``--sequences`` / ``--topic``, ``--frames``,
+    and ``options`` (``setting``, ``ground_remover``, ``config``, ``jobs``, ``skip_bad``)."""
+    from flic_cli.runs.spec import Selection
+
+    seqs, frm = _selection(sequences, frames, topic)
+    return Selection(_data_or_sample(data, moosmann), seqs, frm, **options)

@@ -13,17 +13,18 @@ from flic_cli.cli.app import (
     ConfigOpt,
     DataArg,
     FramesOpt,
+    MethodsOpt,
     ReturnOpt,
     RowsOpt,
     SequencesOpt,
     SettingOpt,
     SkipBadOpt,
     TopicOpt,
-    _data_or_sample,
-    _selection,
     app,
     friendly_errors,
     ground_remover_option,
+    reader_options,
+    selection,
 )
 
 
@@ -39,15 +40,7 @@ from flic_cli.cli.app import (
 @friendly_errors
 def benchmark(
     data: DataArg = None,
-    methods: Annotated[
-        str | None,
-        typer.Option(
-            "--methods",
-            help="Comma-separated method variants to time. Default: the config's "
-            "`default_methods` (`flic config` shows them).",
-            show_default=False,
-        ),
-    ] = None,
+    methods: MethodsOpt = None,
     out: Annotated[
         Path,
         typer.Option(help="Output folder for the CSV tables, environment.json and the plots."),
@@ -122,17 +115,14 @@ def benchmark(
     from flic_cli.config import load_config
     from flic_cli.runs.benchmark import run_benchmark
     from flic_cli.runs.pipeline import parse_methods
-    from flic_cli.runs.spec import BenchmarkRun, Selection
+    from flic_cli.runs.spec import BenchmarkRun
 
     cfg = load_config(config)
     names = parse_methods(methods, cfg)
-    seqs, frm = _selection(sequences, frames)
-    seqs = [topic] if topic else seqs
-    sel = Selection(
-        _data_or_sample(data, moosmann=True), seqs, frm, setting=setting,
+    sel = selection(
+        data, sequences, frames, topic, moosmann=True, setting=setting,
         ground_remover=ground_remover, config=cfg, skip_bad=skip_bad,
-        reader={"columns": columns, "rows": rows, "return": return_index,
-        "calibration": calibration},
+        reader=reader_options(columns, rows, return_index, calibration),
     )  # fmt: skip
     result = run_benchmark(
         BenchmarkRun(sel, out, names, warmup, repeat, rounds, slow_every, threads, plots)

@@ -14,13 +14,13 @@ from flic_cli.cli.app import (
     LabelledDataArg,
     McOpt,
     MethodOpt,
+    MethodsOpt,
     SequencesOpt,
     SkipBadOpt,
-    _data_or_sample,
-    _selection,
     app,
     friendly_errors,
     ground_remover_option,
+    selection,
 )
 
 SchedulerOpt = Annotated[
@@ -72,16 +72,7 @@ def _interrupted(out: Path, resumable: bool) -> None:
 @friendly_errors
 def evaluate(
     data: LabelledDataArg = None,
-    methods: Annotated[
-        str | None,
-        typer.Option(
-            "--methods",
-            "-m",
-            help="Comma-separated method variants, in table order. Default: the config's "
-            "`default_methods` (`flic config` shows them).",
-            show_default=False,
-        ),
-    ] = None,
+    methods: MethodsOpt = None,
     setting: Annotated[
         str,
         typer.Option(
@@ -135,11 +126,10 @@ def evaluate(
     from flic_cli.config import load_config
     from flic_cli.runs.evaluate import run_evaluate
     from flic_cli.runs.pipeline import parse_methods
-    from flic_cli.runs.spec import EvaluateRun, Selection
+    from flic_cli.runs.spec import EvaluateRun
 
     cfg = load_config(config)
     names = parse_methods(methods, cfg)
-    seqs, frm = _selection(sequences, frames)
 
     status: list[str] = []
 
@@ -154,8 +144,8 @@ def evaluate(
         status.append(", ".join(parts))
 
     try:
-        sel = Selection(
-            _data_or_sample(data), seqs, frm, setting=setting, ground_remover=ground_remover,
+        sel = selection(
+            data, sequences, frames, setting=setting, ground_remover=ground_remover,
             config=cfg, jobs=jobs, skip_bad=skip_bad,
         )  # fmt: skip
         result = run_evaluate(
@@ -235,14 +225,13 @@ def sweep_threshold(
     projected once for all values."""
     from flic_cli.config import load_config
     from flic_cli.runs.pipeline import resolve_method
-    from flic_cli.runs.spec import Selection, SweepRun
+    from flic_cli.runs.spec import SweepRun
     from flic_cli.runs.sweep import run_sweep
 
     cfg = load_config(config)
-    seqs, frm = _selection(sequences, frames)
     try:
-        sel = Selection(
-            _data_or_sample(data), seqs, frm, setting=setting, ground_remover=ground_remover,
+        sel = selection(
+            data, sequences, frames, setting=setting, ground_remover=ground_remover,
             config=cfg, jobs=jobs, skip_bad=skip_bad,
         )  # fmt: skip
         result = run_sweep(

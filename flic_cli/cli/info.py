@@ -18,6 +18,7 @@ from flic_cli.cli.app import (
     _selection,
     app,
     friendly_errors,
+    reader_options,
 )
 
 
@@ -58,15 +59,14 @@ def info(
     from flic_cli.io.bag import info_lines, is_bag
 
     path = _data_or_sample(data)
-    seqs, frame_range = _selection(sequences, frames)
-    seqs = [topic] if topic else seqs
+    seqs, frame_range = _selection(sequences, frames, topic)
     if is_bag(path):  # the bag's topics first, then its LiDAR topic like any recording
         lines, chosen = info_lines(path, seqs[0] if seqs else None)
         for line in lines:
             typer.echo(line)
         if not chosen:
             return
-    reader = {"columns": columns, "rows": rows, "return": return_index, "calibration": calibration}
+    reader = reader_options(columns, rows, return_index, calibration)
     for line in describe(path, seqs, frame_range, sample, reader):
         typer.echo(line)
 

@@ -22,11 +22,11 @@ from flic_cli.cli.app import (
     SettingOpt,
     SkipBadOpt,
     TopicOpt,
-    _data_or_sample,
-    _selection,
     app,
     friendly_errors,
     ground_remover_option,
+    reader_options,
+    selection,
 )
 
 
@@ -102,15 +102,12 @@ def segment(
     from flic_cli.config import load_config
     from flic_cli.runs.pipeline import resolve_method
     from flic_cli.runs.segment import run_segment
-    from flic_cli.runs.spec import SegmentRun, Selection
+    from flic_cli.runs.spec import SegmentRun
 
-    seqs, frm = _selection(sequences, frames)
-    seqs = [topic] if topic else seqs
-    sel = Selection(
-        _data_or_sample(data), seqs, frm, setting=setting, ground_remover=ground_remover,
+    sel = selection(
+        data, sequences, frames, topic, setting=setting, ground_remover=ground_remover,
         config=load_config(config), jobs=jobs, skip_bad=skip_bad,
-        reader={"columns": columns, "rows": rows, "return": return_index,
-        "calibration": calibration},
+        reader=reader_options(columns, rows, return_index, calibration),
     )  # fmt: skip
     summary = run_segment(
         SegmentRun(sel, out, resolve_method(method, mc), render, semantics, tuple(export or ()))

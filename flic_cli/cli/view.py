@@ -66,8 +66,7 @@ def view(
     cfg = load_config(config)
     names = parse_methods(method or None, cfg) if method else ["flic14", *cfg.default_methods]
     names = list(dict.fromkeys(names))
-    seqs, frm = _selection(sequences, frames)
-    seqs = [topic] if topic else seqs
+    seqs, frm = _selection(sequences, frames, topic)
     viewer = Viewer(_data_or_sample(data), names, frm, seqs, cfg, ground_remover)
     viewer.init(headless=screenshot is not None)
     if screenshot is not None:

@@ -49,7 +49,7 @@ from flic_cli.io.pointcloud2 import (
     ring_image,
     xyz_of,
 )
-from flic_cli.range_image import RangeImage
+from flic_cli.io.semantickitti import export_path, write_cluster_prediction
 
 FORMAT = "bag"
 SUFFIXES = (".bag", ".mcap", ".db3")
@@ -304,25 +304,11 @@ class BagDataset:
         """The bag's folder (outputs must not go inside a rosbag2 folder)."""
         return [self.root if self.root.is_dir() else self.root.parent]
 
-    def write_prediction(
-        self,
-        out: Path,
-        ref: FrameRef,
-        labels: np.ndarray,
-        image: RangeImage | None = None,
-        semantics: np.ndarray | None = None,
-    ) -> Path:
-        """``<out>/sequences/<topic>/predictions/XXXXXX.label``: one uint32 per point of the
-        message as stored (cluster id in the upper 16 bits, the class in the lower)."""
-        from flic_cli.io.semantickitti import write_predictions
-
-        return write_predictions(out, ref.sequence, ref.frame, labels, semantics)
-
-    @staticmethod
-    def export_path(out: Path, ref: FrameRef, suffix: str) -> Path:
-        """``<out>/sequences/<topic>/<kind>/XXXXXX.<kind>``."""
-        kind = suffix.lstrip(".")
-        return Path(out) / "sequences" / ref.sequence / kind / f"{ref.frame:06d}{suffix}"
+    #: ``<out>/sequences/<topic>/predictions/XXXXXX.label``: one uint32 per point of the
+    #: message as stored (cluster id in the upper 16 bits, the class in the lower); exports
+    #: ``<out>/sequences/<topic>/<kind>/XXXXXX.<kind>`` (the SemanticKITTI layout)
+    write_prediction = staticmethod(write_cluster_prediction)
+    export_path = staticmethod(export_path)
 
     def load(self, ref: FrameRef) -> BagFrame:
         """Read revolution ``ref.frame`` of the topic.

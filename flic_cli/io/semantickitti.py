@@ -322,6 +322,28 @@ def predictions_path(out_root: str | Path, sequence: str, frame: int) -> Path:
     return Path(out_root) / "sequences" / sequence / "predictions" / f"{frame:06d}.label"
 
 
+def export_path(out: Path, ref: FrameRef, suffix: str) -> Path:
+    """Where a per-frame export of ``ref`` goes in the SemanticKITTI layout, shared by every
+    format whose frames are a sequence (or recording, topic) and a number:
+    ``<out>/sequences/<sequence>/<kind>/<frame:06d><suffix>``, ``kind`` the suffix without its
+    dot (:meth:`flic_cli.io.base.Dataset.export_path`)."""
+    kind = suffix.lstrip(".")
+    return Path(out) / "sequences" / ref.sequence / kind / f"{ref.frame:06d}{suffix}"
+
+
+def write_cluster_prediction(
+    out: Path,
+    ref: FrameRef,
+    labels: np.ndarray,
+    image: RangeImage | None = None,
+    semantics: np.ndarray | None = None,
+) -> Path:
+    """:meth:`flic_cli.io.base.Dataset.write_prediction` of the formats whose predictions are
+    SemanticKITTI ``.label`` files of cluster ids, one per point as read (``image`` unused):
+    ``<out>/sequences/<sequence>/predictions/<frame:06d>.label`` (:func:`write_predictions`)."""
+    return write_predictions(out, ref.sequence, ref.frame, labels, semantics)
+
+
 def write_predictions(
     out_root: str | Path,
     sequence: str,
@@ -596,11 +618,7 @@ class SemanticKittiDataset:
             return write_predictions(out, ref.sequence, ref.frame, labels)
         return write_semantic_predictions(out, ref.sequence, ref.frame, semantics, labels)
 
-    @staticmethod
-    def export_path(out: Path, ref: FrameRef, suffix: str) -> Path:
-        """Where a per-frame export goes: ``<out>/sequences/NN/<kind>/XXXXXX.<kind>``."""
-        kind = suffix.lstrip(".")
-        return Path(out) / "sequences" / ref.sequence / kind / f"{ref.frame:06d}{suffix}"
+    export_path = staticmethod(export_path)
 
     def load(self, ref: FrameRef) -> Frame:
         """Read one frame (points with non-finite coordinates dropped, with a warning)."""

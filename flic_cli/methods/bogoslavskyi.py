@@ -9,8 +9,7 @@ from pydantic import Field
 from pydantic.dataclasses import dataclass
 
 from flic_cli.component import STRICT
-from flic_cli.methods.base import ground_parts, point_weights
-from flic_cli.methods.connections import ANGLE, run_kernel
+from flic_cli.methods.connections import ANGLE, run_kernel, segment_image
 from flic_cli.methods.flic import cached_sets
 from flic_cli.range_image import RangeImage
 
@@ -46,19 +45,9 @@ class Bogoslavskyi:
     slow: ClassVar[bool] = False
 
     def segment(self, image: RangeImage, points: np.ndarray, ground: Ground | None) -> np.ndarray:
-        left_out, attached = ground_parts(ground)
-        return run_kernel(
-            image.ranges,
-            image.elevation,
-            cached_sets((), "map"),
-            DIRECT,
-            ANGLE,
-            float(np.tan(np.radians(self.angle_deg))),
-            self.min_size,
-            left_out,
-            point_weights(image),
-            image.point_pixel,
-            attached,
+        param = float(np.tan(np.radians(self.angle_deg)))
+        return segment_image(
+            image, ground, cached_sets(*DIRECT), DIRECT, ANGLE, param, self.min_size
         )
 
 
@@ -69,6 +58,7 @@ def bogoslavskyi_labels(
     min_size: int = Bogoslavskyi.min_size,
     mask: np.ndarray | None = None,
     weights: np.ndarray | None = None,
+    azimuth_offset: np.ndarray | None = None,
 ) -> np.ndarray:
     """Cluster labels by the angle criterion: 4-neighbours (wrapping) join when beta > angle_deg.
 
@@ -83,6 +73,8 @@ def bogoslavskyi_labels(
     min_size : smallest cluster, points (the sum of its pixels' ``weights``).
     mask : pixels to cluster (default: valid ones; a pixel without a range is never clustered).
     weights : (H, W) int, points per pixel (default 1: the minimum size counts pixels).
+    azimuth_offset : (H,) azimuth offset of every row, radians (default zeros; see
+        :func:`flic_cli.methods.flic.flic_labels`).
 
     Returns
     -------
@@ -99,4 +91,5 @@ def bogoslavskyi_labels(
         min_size,
         skip,
         weights,
+        azimuth_offset=azimuth_offset,
     )

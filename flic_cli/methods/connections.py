@@ -13,11 +13,14 @@ the flagged pairs are tested and merged.
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 from numba import njit
 
 from flic_cli.bitwords import pack, trailing_zeros
-from flic_cli.methods.criteria import ANGLE, DISTANCE, angle_edge, distance_edge, edge
+from flic_cli.methods.base import ground_parts, point_weights
+from flic_cli.methods.criteria import ANGLE, DISTANCE, angle_edge, distance_edge, edge, ray_angle
 from flic_cli.methods.engine import (
     attach,
     attached_input,
@@ -30,6 +33,10 @@ from flic_cli.methods.engine import (
     union,
 )
 
+if TYPE_CHECKING:
+    from flic_cli.ground.base import Ground
+    from flic_cli.range_image import RangeImage
+
 __all__ = [
     "ANGLE",
     "DISTANCE",
@@ -38,12 +45,14 @@ __all__ = [
     "connect",
     "connect_points",
     "run_kernel",
+    "segment_image",
 ]
 
 
 @njit(cache=True)
 def angle_tables(
     elevation: np.ndarray,
+    azimuth_offset: np.ndarray,
     width: int,
     steps: np.ndarray,
     offsets: np.ndarray,
@@ -55,6 +64,10 @@ def angle_tables(
     Parameters
     ----------
     elevation : (H,) float64 row elevations, radians.
+    azimuth_offset : (H,) float64 azimuth offset of every row, radians (a pixel's azimuth is its
+        column's centre plus it): the rays of vertical neighbours are
+        :func:`flic_cli.methods.criteria.ray_angle` apart, those of one row only the columns'
+        azimuth difference.
     width : W, columns over 360 deg.
     steps, offsets, lattice : the connection sets (see :func:`connect`).
     criterion : DISTANCE (the sines of vertical angles are not needed: left 0) or ANGLE.
@@ -80,7 +93,7 @@ def angle_tables(
     for r in range(h):  # the direct connections
         out[0, r, 0] = 1.0
         if r > 0:
-            a = elevation[r - 1] - elevation[r]
+            a = ray_angle(elevation[r - 1], elevation[r], azimuth_offset[r - 1], azimuth_offset[r])
             out[0, r, 0] = np.cos(a)
             if criterion == ANGLE:
                 out[0, r, 1] = np.sin(abs(a))
@@ -104,7 +117,9 @@ def angle_tables(
         cwm = np.cos(wrap_cols * h_step)
         for r in range(r0, h, rstep):
             if r + kr < h:
-                a = elevation[r] - elevation[r + kr]
+                a = ray_angle(
+                    elevation[r], elevation[r + kr], azimuth_offset[r], azimuth_offset[r + kr]
+                )
                 out[m, r, 0] = np.cos(a)
                 if criterion == ANGLE:
                     out[m, r, 1] = np.sin(abs(a))
@@ -188,7 +203,8 @@ def _differ(flags: np.ndarray, a: np.ndarray, b: np.ndarray) -> None:
 
 
 @njit(cache=True)
-def _join_flagged(
+def _join(
+    flags: np.ndarray,
     words: np.ndarray,
     mask: np.ndarray,
     comp: np.ndarray,
@@ -196,6 +212,8 @@ def _join_flagged(
     parent: np.ndarray,
     row: int,
     partner: int,
+    lo: int,
+    hi: int,
     wrap: int,
     w: int,
     cos_a: float,
@@ -203,8 +221,20 @@ def _join_flagged(
     criterion: int,
     param: float,
 ) -> None:
-    """Merge the linked pairs (row + c, partner + c) for the set bits c of ``words & mask``; a
-    partner column past ``wrap`` is taken ``w`` columns back (the 360 deg seam)."""
+    """Merge the linked pairs (row + c, partner + c) of pixels in different direct components,
+    for the columns ``lo <= c < hi`` set in the words ``mask``; a partner column past ``wrap``
+    is taken ``w`` columns back (the 360 deg seam). The flags "different components" of the
+    whole range are computed first (:func:`_differ`, vectorised) and packed into ``words``
+    (``flags``: the bytes, 8 of slack); only the flagged pairs are tested (by ``criterion``, at
+    the angle cos ``cos_a``, sin ``sin_a``)."""
+    mid = min(hi, wrap)
+    if lo < mid:
+        _differ(flags[lo:mid], comp[row + lo : row + mid], comp[partner + lo : partner + mid])
+    if mid < hi:
+        _differ(
+            flags[mid:hi], comp[row + mid : row + hi], comp[partner + mid - w : partner + hi - w]
+        )
+    pack(flags[: flags.size - 8], words)
     one = np.uint64(1)
     for k in range(words.size):
         bits = words[k] & mask[k]
@@ -330,8 +360,14 @@ def components(
     for m in range(1, steps.shape[0]):
         kr = steps[m, 0]
         kc = steps[m, 1]
+        # the rows r0, r0 + rstep, ... and, in each, the columns whose connections exist: in the
+        # map reading, the lattice columns c0, c0 + kc, ..., last (mask_v; mask_h without last)
+        c0 = 0
+        last = 0
+        cols = 0
         if lattice[m]:
             r0 = offsets[m, 0] % kr
+            rstep = kr
             c0 = offsets[m, 1] % kc
             if c0 >= w:
                 continue  # no lattice column
@@ -339,25 +375,24 @@ def components(
             cols = (last - c0) // kc + 1
             _lattice_mask(mask_v, c0, kc, cols)
             _lattice_mask(mask_h, c0, kc, cols - 1)
-            for r in range(r0, h, kr):
-                row = r * w
-                if r + kr < h:
-                    below = row + kr * w
-                    _differ(flags[:w], comp[row : row + w], comp[below : below + w])
-                    pack(flags[: 64 * nw], flag_w)
-                    _join_flagged(
-                        flag_w, mask_v, comp, nodes, parent, row, below, w, w,
-                        angles[m, r, 0], angles[m, r, 1], criterion, param,
-                    )  # fmt: skip
+        else:
+            r0 = 0
+            rstep = 1
+            _lattice_mask(mask_v, 0, 1, w)
+        shift = kc % w
+        for r in range(r0, h, rstep):
+            row = r * w
+            if r + kr < h:  # down: (r, c) to (r + kr, c)
+                _join(
+                    flags, flag_w, mask_v, comp, nodes, parent, row, row + kr * w, 0, w, w, w,
+                    angles[m, r, 0], angles[m, r, 1], criterion, param,
+                )  # fmt: skip
+            if lattice[m]:
                 if cols > 1:
-                    # pairs (c, c + kc) of lattice columns c < last
-                    i0 = row + c0
-                    i1 = row + last - kc + 1
-                    _differ(flags[c0 : last - kc + 1], comp[i0:i1], comp[i0 + kc : i1 + kc])
-                    pack(flags[: 64 * nw], flag_w)
-                    _join_flagged(
-                        flag_w, mask_h, comp, nodes, parent, row, row + kc, w, w,
-                        angles[m, r, 2], angles[m, r, 3], criterion, param,
+                    # right: the pairs (c, c + kc) of lattice columns c < last
+                    _join(
+                        flags, flag_w, mask_h, comp, nodes, parent, row, row + kc, c0,
+                        last - kc + 1, w, w, angles[m, r, 2], angles[m, r, 3], criterion, param,
                     )  # fmt: skip
                     # from the last lattice column across the seam to the first
                     i = row + last
@@ -366,28 +401,11 @@ def components(
                         if edge(nodes[i], nodes[j], angles[m, r, 4], angles[m, r, 5],
                                    criterion, param):  # fmt: skip
                             union(parent, comp[i], comp[j])
-        else:
-            shift = kc % w
-            _lattice_mask(mask_v, 0, 1, w)
-            for r in range(h):
-                row = r * w
-                if r + kr < h:
-                    below = row + kr * w
-                    _differ(flags[:w], comp[row : row + w], comp[below : below + w])
-                    pack(flags[: 64 * nw], flag_w)
-                    _join_flagged(
-                        flag_w, mask_v, comp, nodes, parent, row, below, w, w,
-                        angles[m, r, 0], angles[m, r, 1], criterion, param,
-                    )  # fmt: skip
-                if shift:  # (else every pixel would be its own neighbour)
-                    rest = w - shift
-                    _differ(flags[:rest], comp[row : row + rest], comp[row + shift : row + w])
-                    _differ(flags[rest:w], comp[row + rest : row + w], comp[row : row + shift])
-                    pack(flags[: 64 * nw], flag_w)
-                    _join_flagged(
-                        flag_w, mask_v, comp, nodes, parent, row, row + shift, rest, w,
-                        angles[m, r, 2], angles[m, r, 3], criterion, param,
-                    )  # fmt: skip
+            elif shift:  # right: (c, c + kc), wrapping (shift 0: every pixel its own neighbour)
+                _join(
+                    flags, flag_w, mask_v, comp, nodes, parent, row, row + shift, 0, w, w - shift,
+                    w, angles[m, r, 2], angles[m, r, 3], criterion, param,
+                )  # fmt: skip
 
     attach(labels, size, attached)
     return labels[:n], number(parent, size, nl, min_size)
@@ -410,22 +428,47 @@ def connect_points(point_pixel: np.ndarray, *args) -> np.ndarray:  # noqa: ANN00
     return point_output(labels, final, point_pixel)
 
 
-#: (elevation bytes, width, sets key, criterion) -> angle_tables; cleared when full
+#: (elevation bytes, azimuth offset bytes, width, sets key, criterion) -> angle_tables; cleared
+#: when full
 _ANGLES: dict[tuple, np.ndarray] = {}
 
 
 def cached_angles(
-    elevation: np.ndarray, width: int, sets: tuple, key: object, criterion: int
+    elevation: np.ndarray,
+    azimuth_offset: np.ndarray,
+    width: int,
+    sets: tuple,
+    key: object,
+    criterion: int,
 ) -> np.ndarray:
-    """:func:`angle_tables`, computed once per elevation, width and connection sets (``key`` names
-    the sets, e.g. the maps and reading; ``sets`` is ``(steps, offsets, lattice)``)."""
-    k = (elevation.tobytes(), width, key, criterion)
+    """:func:`angle_tables`, computed once per elevation, azimuth offsets, width and connection
+    sets (``key`` names the sets, e.g. the maps and reading; ``sets`` is ``(steps, offsets,
+    lattice)``)."""
+    k = (elevation.tobytes(), azimuth_offset.tobytes(), width, key, criterion)
     out = _ANGLES.get(k)
     if out is None:
         if len(_ANGLES) >= 64:
             _ANGLES.clear()
-        out = _ANGLES[k] = angle_tables(elevation, width, *sets, criterion)
+        out = _ANGLES[k] = angle_tables(elevation, azimuth_offset, width, *sets, criterion)
     return out
+
+
+#: rows -> (rows,) read-only zeros: the azimuth offsets of an image without them
+_NO_OFFSETS: dict[int, np.ndarray] = {}
+
+
+def offset_input(azimuth_offset: np.ndarray | None, h: int) -> np.ndarray:
+    """The (H,) contiguous float64 azimuth offsets of the rows (zeros for None); shape checked."""
+    if azimuth_offset is None:
+        zeros = _NO_OFFSETS.get(h)
+        if zeros is None:
+            zeros = _NO_OFFSETS[h] = np.zeros(h)
+            zeros.flags.writeable = False
+        return zeros
+    offset = np.ascontiguousarray(azimuth_offset, dtype=np.float64)
+    if offset.shape != (h,):
+        raise ValueError(f"azimuth_offset has shape {offset.shape}, the image {h} rows")
+    return offset
 
 
 def run_kernel(
@@ -440,6 +483,7 @@ def run_kernel(
     weights: np.ndarray | None = None,
     point_pixel: np.ndarray | None = None,
     attached: np.ndarray | None = None,
+    azimuth_offset: np.ndarray | None = None,
 ) -> np.ndarray:
     """Labels per pixel (:func:`connect`) or, given ``point_pixel``, per point
     (:func:`connect_points`).
@@ -455,11 +499,14 @@ def run_kernel(
     weights : (H, W) int, points per pixel, or None (1 per pixel).
     point_pixel : (N,) int64 pixel of every point (-1: none), or None for per-pixel labels.
     attached : (K, 3) held pixels, see :func:`connect`, or None.
+    azimuth_offset : (H,) azimuth offset of every row, radians
+        (:attr:`flic_cli.range_image.RangeImage.azimuth_offset`), or None (zeros).
     """
     ranges, elevation, skip, use_skip, weights, use_weights = kernel_inputs(
         ranges, elevation, skip, weights
     )
-    angles = cached_angles(elevation, ranges.shape[1], sets, key, criterion)
+    offset = offset_input(azimuth_offset, elevation.size)
+    angles = cached_angles(elevation, offset, ranges.shape[1], sets, key, criterion)
     args = (
         ranges,
         skip,
@@ -476,3 +523,32 @@ def run_kernel(
     if point_pixel is None:
         return connect(*args)
     return connect_points(np.ascontiguousarray(point_pixel, dtype=np.int64), *args)
+
+
+def segment_image(
+    image: RangeImage,
+    ground: Ground | None,
+    sets: tuple[np.ndarray, np.ndarray, np.ndarray],
+    key: object,
+    criterion: int,
+    param: float,
+    min_size: int,
+) -> np.ndarray:
+    """:func:`run_kernel` on a method's input: (N,) labels of the points of ``image`` (its
+    ranges, row elevations and azimuth offsets, points per pixel), the pixels ``ground`` leaves
+    out skipped and its held pixels attached (:func:`flic_cli.methods.base.ground_parts`)."""
+    left_out, attached = ground_parts(ground)
+    return run_kernel(
+        image.ranges,
+        image.elevation,
+        sets,
+        key,
+        criterion,
+        param,
+        min_size,
+        left_out,
+        point_weights(image),
+        image.point_pixel,
+        attached,
+        image.azimuth_offset,
+    )

@@ -17,14 +17,33 @@ apart (cos ``c``, sin ``s``):
   ``beta = atan2(d_min sin(alpha), d_max - d_min cos(alpha))`` exceeds theta, tested without
   arctan: ``d_min sin(alpha) > tan(theta) (d_max - d_min cos(alpha))`` or the bracket is not
   positive (beta >= 90 deg) (``param`` = tan(theta)).
+
+The angle ``alpha`` itself is :func:`ray_angle`: the angle between the rays of the two pixels,
+each at its row's elevation and its own azimuth (the column's centre plus the row's azimuth
+offset, :attr:`flic_cli.range_image.RangeImage.azimuth_offset`).
 """
 
 from __future__ import annotations
 
+import numpy as np
 from numba import njit
 
 DISTANCE = 0  # connected when d1^2 + d2^2 - 2 cos(a) d1 d2 < param   (param = t^2)
 ANGLE = 1  # connected when atan2(d_min sin a, d_max - d_min cos a) > theta  (param = tan theta)
+
+
+@njit(cache=True)
+def ray_angle(el1: float, el2: float, az1: float, az2: float) -> float:
+    """The angle between two rays at elevations ``el1``, ``el2`` and azimuths ``az1``, ``az2``
+    (radians): ``el1 - el2`` (signed) when the azimuths are equal, as for two pixels of one column
+    without azimuth offsets (exactly the value the labels were defined with), else the great-circle
+    angle by the haversine formula, ``hav(alpha) = hav(el1 - el2) + cos(el1) cos(el2)
+    hav(az1 - az2)`` (>= 0)."""
+    a = el1 - el2
+    if az1 == az2:
+        return a
+    h = np.sin(0.5 * a) ** 2 + np.cos(el1) * np.cos(el2) * np.sin(0.5 * (az1 - az2)) ** 2
+    return 2.0 * np.arcsin(min(1.0, np.sqrt(h)))
 
 
 @njit(cache=True, inline="always")

@@ -10,8 +10,9 @@ from pydantic import Field, NonNegativeInt, field_validator
 from pydantic.dataclasses import dataclass
 
 from flic_cli.component import STRICT
-from flic_cli.methods.base import ground_parts, point_weights
-from flic_cli.methods.connections import DISTANCE, run_kernel
+from flic_cli.methods.base import ground_parts
+from flic_cli.methods.connections import DISTANCE, offset_input, run_kernel, segment_image
+from flic_cli.methods.criteria import ray_angle
 from flic_cli.range_image import RangeImage
 
 if TYPE_CHECKING:
@@ -86,6 +87,14 @@ def _linked(d1: np.ndarray, d2: np.ndarray, cos_a: np.ndarray, t2: float) -> np.
     return d1 * d1 + d2 * d2 - 2.0 * cos_a * d1 * d2 < t2
 
 
+def _vertical_cos(el: np.ndarray, offset: np.ndarray, rows: np.ndarray, step: int) -> np.ndarray:
+    """(len(rows) - step, 1) cos of the angle between the rays of ``rows[i]`` and
+    ``rows[i + step]`` in one column (:func:`flic_cli.methods.criteria.ray_angle`)."""
+    a, b = rows[:-step], rows[step:]
+    angles = [ray_angle(el[i], el[j], offset[i], offset[j]) for i, j in zip(a, b, strict=True)]
+    return np.cos(np.array(angles, dtype=np.float64).reshape(-1))[:, None]
+
+
 def _row_cos(elevation: np.ndarray, cols: float, width: int) -> np.ndarray:
     """(H, 1) cos of the angle between two rays of one row ``cols`` columns apart."""
     ce2 = np.cos(elevation) ** 2
@@ -126,8 +135,8 @@ class Flic:
         return maps
 
     def segment(self, image: RangeImage, points: np.ndarray, ground: Ground | None) -> np.ndarray:
-        left_out, attached = ground_parts(ground)
         if self.backend == "scipy":
+            left_out, attached = ground_parts(ground)
             mask = image.ranges > 0 if left_out is None else (image.ranges > 0) & ~left_out
             labels = flic_labels_scipy(
                 image.ranges,
@@ -139,22 +148,12 @@ class Flic:
                 mask,
                 image.point_counts(),
                 attached,
+                image.azimuth_offset,
             )
             return image.point_labels(labels)
         key = (maps_key(self.maps), self.mc_mode)
-        return run_kernel(
-            image.ranges,
-            image.elevation,
-            cached_sets(*key),
-            key,
-            DISTANCE,
-            float(self.threshold_m) ** 2,
-            self.min_size,
-            left_out,
-            point_weights(image),
-            image.point_pixel,
-            attached,
-        )
+        t2 = float(self.threshold_m) ** 2
+        return segment_image(image, ground, cached_sets(*key), key, DISTANCE, t2, self.min_size)
 
 
 def flic_labels_scipy(
@@ -167,6 +166,7 @@ def flic_labels_scipy(
     mask: np.ndarray | None = None,
     weights: np.ndarray | None = None,
     attached: np.ndarray | None = None,
+    azimuth_offset: np.ndarray | None = None,
 ) -> np.ndarray:
     """FLIC the way the paper implements it, with scipy: same result as :func:`flic_labels`.
 
@@ -187,10 +187,14 @@ def flic_labels_scipy(
     d = np.asarray(ranges, dtype=np.float64)
     el = np.asarray(elevation, dtype=np.float64)
     h, w = d.shape
+    offset = offset_input(azimuth_offset, h)
+    rows_all = np.arange(h)
     valid = d > 0 if mask is None else np.asarray(mask, dtype=bool) & (d > 0)
     t2 = float(threshold_m) ** 2
     steps, offsets, lattice = connection_sets(maps, mc_mode)
-    vert = valid[:-1] & valid[1:] & _linked(d[:-1], d[1:], np.cos(el[:-1] - el[1:])[:, None], t2)
+    vert = (
+        valid[:-1] & valid[1:] & _linked(d[:-1], d[1:], _vertical_cos(el, offset, rows_all, 1), t2)
+    )
     right = np.roll(d, -1, axis=1)
     horiz = valid & np.roll(valid, -1, axis=1) & _linked(d, right, _row_cos(el, 1, w), t2)
     big = np.zeros((2 * h - 1, 2 * w), dtype=bool)
@@ -217,9 +221,9 @@ def flic_labels_scipy(
             ok = sub_v & sub_v[:, nxt] & _linked(sub_d, sub_d[:, nxt], cos_h, t2)
             ok &= sub_i != sub_i[:, nxt]
             pairs += [sub_i[ok], sub_i[:, nxt][ok]]
-            el_sub = el[r_sel]
         else:
-            sub_d, sub_v, sub_i, el_sub = d, valid, idx, el
+            r_sel = rows_all
+            sub_d, sub_v, sub_i = d, valid, idx
             nd = np.roll(d, -kc, axis=1)
             ok = valid & np.roll(valid, -kc, axis=1) & _linked(d, nd, _row_cos(el, kc, w), t2)
             ok &= idx != np.roll(idx, -kc, axis=1)
@@ -227,7 +231,7 @@ def flic_labels_scipy(
         step = 1 if lat else kr
         if sub_d.shape[0] > step:
             up, down = sub_d[:-step], sub_d[step:]
-            cos_v = np.cos(el_sub[:-step] - el_sub[step:])[:, None]
+            cos_v = _vertical_cos(el, offset, r_sel, step)
             ok = sub_v[:-step] & sub_v[step:] & _linked(up, down, cos_v, t2)
             pairs += [sub_i[:-step][ok], sub_i[step:][ok]]
     flat = direct.reshape(-1)
@@ -251,6 +255,7 @@ def flic_labels(
     mc_mode: str = Flic.mc_mode,
     mask: np.ndarray | None = None,
     weights: np.ndarray | None = None,
+    azimuth_offset: np.ndarray | None = None,
 ) -> np.ndarray:
     """FLIC cluster labels of a range image.
 
@@ -273,6 +278,9 @@ def flic_labels(
         is never clustered.
     weights : (H, W) int, points per pixel (:meth:`flic_cli.range_image.RangeImage.point_counts`);
         default 1 per pixel (the minimum size then counts pixels).
+    azimuth_offset : (H,) azimuth offset of every row, radians (a pixel's azimuth is its
+        column's centre plus it; :attr:`flic_cli.range_image.RangeImage.azimuth_offset`);
+        default zeros.
 
     Returns
     -------
@@ -290,6 +298,7 @@ def flic_labels(
         min_size,
         skip,
         weights,
+        azimuth_offset=azimuth_offset,
     )
 
 
