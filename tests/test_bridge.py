@@ -29,11 +29,25 @@ def xyz_of(ranges: np.ndarray, elevation: np.ndarray) -> np.ndarray:
     )
 
 
-def bridge_graph(ranges, elevation, mask, threshold, gamma_deg, reach):
+def column_neighbours(node, ranges, rq, cq, reach):
+    """Ranges of the first node above and the first node below pixel (rq, cq) in its column,
+    at most ``reach`` rows away (None where there is none)."""
+    h = node.shape[0]
+    up = next(
+        (ranges[r2, cq] for r2 in range(rq - 1, max(-1, rq - reach - 1), -1) if node[r2, cq]), None
+    )
+    down = next(
+        (ranges[r2, cq] for r2 in range(rq + 1, min(h, rq + reach + 1)) if node[r2, cq]), None
+    )
+    return [float(x) for x in (up, down) if x is not None]
+
+
+def bridge_graph(ranges, elevation, mask, threshold, gamma_deg, reach, fixed_side_gaps=True):
     """Edges of the Bridge graph, walked exactly as the module docstring says.
 
     Returns the edges and, for every distance test made, ``distance - t_p`` (to stay away from
-    ties between float32 ranges and float64 coordinates).
+    ties between float32 ranges and float64 coordinates) and, for every gap test, the smallest
+    ``|range difference| - t_p`` over the column.
     """
     h, w = ranges.shape
     pts = xyz_of(ranges, elevation)
@@ -44,18 +58,26 @@ def bridge_graph(ranges, elevation, mask, threshold, gamma_deg, reach):
             if not node[r, c]:
                 continue
             d = ranges[r, c]
-            tp = max(threshold, float(d) * np.sin(np.radians(gamma_deg)))
+            t_far = max(threshold, float(d) * np.sin(np.radians(gamma_deg)))
             ends = {}
             for dr, dc in (LEFT, UP, *DIAGONALS):
                 if (dr, dc) in DIAGONALS and ends.get(LEFT) == 1 and ends.get(UP) == 1:
                     break  # inside a surface: no diagonal walks
                 k_max = min(reach, r if dr else reach, w - 1 if dc else reach)
+                crossed_gap = False  # an open gap (not a hole in p's surface) passed
                 for k in range(1, k_max + 1):
                     rq, cq = r + k * dr, (c + k * dc) % w
                     if not node[rq, cq]:
                         if ranges[rq, cq] > d:
                             break  # a range beyond p outside the mask: free space
+                        if fixed_side_gaps and dc != 0:
+                            # open: neither the first node above nor the first below is
+                            # within t_far of d (a hole in p's surface would show p's surface)
+                            near = column_neighbours(node, ranges, rq, cq, reach)
+                            margins.extend(abs(x - float(d)) - t_far for x in near)
+                            crossed_gap |= not any(abs(x - float(d)) < t_far for x in near)
                         continue  # a hole
+                    tp = threshold if crossed_gap else t_far
                     dist = float(np.linalg.norm(pts[r, c] - pts[rq, cq]))
                     margins.append(dist - tp)
                     if dist < tp:
@@ -110,14 +132,15 @@ def scenes(draw):
     gamma=st.sampled_from([0.0, 1.0, 2.0, 5.0]),
     reach=st.integers(1, 20),
     min_size=st.integers(1, 10),
+    fixed=st.booleans(),
 )
-def test_bridge_equals_components_of_its_graph(scene, threshold, gamma, reach, min_size):
+def test_bridge_equals_components_of_its_graph(scene, threshold, gamma, reach, min_size, fixed):
     ranges, elevation, mask, weights = scene
-    edges, margins = bridge_graph(ranges, elevation, mask, threshold, gamma, reach)
+    edges, margins = bridge_graph(ranges, elevation, mask, threshold, gamma, reach, fixed)
     assume(all(abs(m) > 1e-4 for m in margins))
     node = mask & (ranges > 0)
     expected = components(ranges.shape, node, edges, weights, min_size)
-    got = bridge_labels(ranges, elevation, threshold, gamma, reach, min_size, mask, weights)
+    got = bridge_labels(ranges, elevation, threshold, gamma, reach, min_size, mask, weights, fixed)
     np.testing.assert_array_equal(got, expected)
 
 
@@ -138,11 +161,11 @@ def test_bridge_gives_the_labels_of_the_previous_kernel(
     mask = mask if masked else None
     weights = weights if weighted else None
     np.testing.assert_array_equal(
-        bridge_labels(ranges, elevation, threshold, gamma, reach, min_size, mask, weights),
+        bridge_labels(ranges, elevation, threshold, gamma, reach, min_size, mask, weights, False),
         reference_kernels.bridge_labels(
             ranges, elevation, threshold, gamma, reach, min_size, mask, weights
         ),
-    )
+    )  # the rule for gaps beside (fixed_side_gaps) came after that kernel
 
 
 @settings(max_examples=200, deadline=None)
@@ -244,9 +267,9 @@ def _person(x: float, y: float, instance: int):
     return Box((x, y, -SENSOR_HEIGHT_M + 0.875), (0.175, 0.25, 0.875), 0.0, 30, instance)
 
 
-# Beyond about 14 m the link distance d sin(2 deg) exceeds the 0.5 m gap and, where only holes
-# (removed ground, sky) lie between them, two such people join (DBSCAN with eps 0.5 m is no
-# different); the sample's sidewalks lie 5-12 m from the sensor.
+# Beyond about 14 m the link distance d sin(2 deg) exceeds the 0.5 m gap; where only holes
+# (removed ground, sky) lie between them, two such people join unless fixed_side_gaps is set
+# (test_two_people_half_a_metre_apart_far_away_are_two_clusters; results/bridge-cases/).
 @pytest.mark.parametrize("distance_m", [6.0, 9.0, 12.0])
 @pytest.mark.parametrize("behind", ["nothing", "facade"])
 def test_two_people_one_metre_apart_stay_two_clusters(distance_m, behind):
@@ -273,3 +296,54 @@ def test_two_people_one_metre_apart_stay_two_clusters(distance_m, behind):
     lb = np.bincount(b).argmax()
     assert la > 0 and lb > 0 and la != lb
     assert (a == la).mean() > 0.95 and (b == lb).mean() > 0.95
+
+
+def _two_people_image(distance_m: float, gap_m: float):
+    """Two people side by side ``gap_m`` apart at ``distance_m``, nothing behind them and no
+    ground (the "No Ground" setting), cast with the sample's HDL-64E model at 2048 columns."""
+    from flic_cli.sample import HDL64_PITCH_DEG, Scene, cast
+
+    half = (gap_m + 0.5) / 2
+    boxes = [_person(distance_m, -half, 1), _person(distance_m, half, 2)]
+    scene = Scene(0, 0, np.eye(3, 4), None, boxes, [])
+    elevation = -np.radians(HDL64_PITCH_DEG)
+    img0 = RangeImage(np.zeros((64, WIDTH), np.float32), elevation, np.zeros(0, np.int64), "x")
+    ranges, _, instance = cast(scene, HDL64_PITCH_DEG, img0.azimuth, np.random.default_rng(0))
+    return ranges.astype(np.float32), elevation, instance
+
+
+@pytest.mark.parametrize("distance_m", [20.0, 25.0])
+def test_two_people_half_a_metre_apart_far_away_are_two_clusters(distance_m):
+    ranges, elevation, instance = _two_people_image(distance_m, 0.5)
+    for fixed, apart in ((True, True), (False, False)):  # the rule before joined them
+        labels = bridge_labels(ranges, elevation, min_size=10, fixed_side_gaps=fixed)
+        a, b = labels[instance == 1], labels[instance == 2]
+        assert a.size > 40 and b.size > 40
+        la, lb = np.bincount(a).argmax(), np.bincount(b).argmax()
+        assert la > 0 and lb > 0 and (a == la).all() and (b == lb).all()
+        assert (la != lb) == apart
+
+
+def test_a_hole_in_a_surface_is_still_bridged_at_the_far_link_distance():
+    # A wall at 20 m with 8 empty columns (0.49 m, below d sin(2 deg) = 0.70 m, above the
+    # 0.35 m threshold): a band of missing returns with the wall above and below it is a hole
+    # in the wall and bridged; the same columns empty over the wall's whole height are a gap
+    # between two things.
+    ranges = wall(20.0, slice(100, 160))
+    hole = ranges.copy()
+    hole[26:34, 126:134] = 0.0
+    labels = bridge_labels(hole, ELEVATION, min_size=1, fixed_side_gaps=True)
+    assert np.unique(labels[hole > 0]).size == 1
+    gap = ranges.copy()
+    gap[:, 126:134] = 0.0
+    labels = bridge_labels(gap, ELEVATION, min_size=1, fixed_side_gaps=True)
+    assert labels[30, 110] > 0 and labels[30, 150] > 0 and labels[30, 110] != labels[30, 150]
+    assert np.unique(labels[gap > 0]).size == 2
+    old = bridge_labels(gap, ELEVATION, min_size=1, fixed_side_gaps=False)
+    assert np.unique(old[gap > 0]).size == 1
+    # a hole whose column shows a farther thing above it (a window) and the wall below it is
+    # still a hole in the wall
+    window = hole.copy()
+    window[20:26, 126:134] = 35.0
+    labels = bridge_labels(window, ELEVATION, min_size=1, fixed_side_gaps=True)
+    assert np.unique(labels[window == 20.0]).size == 1
