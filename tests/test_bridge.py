@@ -29,16 +29,12 @@ def xyz_of(ranges: np.ndarray, elevation: np.ndarray) -> np.ndarray:
     )
 
 
-def column_neighbours(node, ranges, rq, cq, reach):
-    """Ranges of the first node above and the first node below pixel (rq, cq) in its column,
-    at most ``reach`` rows away (None where there is none)."""
+def column_neighbours(node, ranges, rq, cq):
+    """Ranges of the first node above and the first node below pixel (rq, cq) in its column
+    (the ones that exist)."""
     h = node.shape[0]
-    up = next(
-        (ranges[r2, cq] for r2 in range(rq - 1, max(-1, rq - reach - 1), -1) if node[r2, cq]), None
-    )
-    down = next(
-        (ranges[r2, cq] for r2 in range(rq + 1, min(h, rq + reach + 1)) if node[r2, cq]), None
-    )
+    up = next((ranges[r2, cq] for r2 in range(rq - 1, -1, -1) if node[r2, cq]), None)
+    down = next((ranges[r2, cq] for r2 in range(rq + 1, h) if node[r2, cq]), None)
     return [float(x) for x in (up, down) if x is not None]
 
 
@@ -71,11 +67,14 @@ def bridge_graph(ranges, elevation, mask, threshold, gamma_deg, reach, fixed_sid
                         if ranges[rq, cq] > d:
                             break  # a range beyond p outside the mask: free space
                         if fixed_side_gaps and dc != 0:
-                            # open: neither the first node above nor the first below is
-                            # within t_far of d (a hole in p's surface would show p's surface)
-                            near = column_neighbours(node, ranges, rq, cq, reach)
+                            # open: the first node above or below is beyond d + t_far (the
+                            # scan sees through the gap's column) and neither is within t_far
+                            # of d (a hole in p's surface would show p's surface)
+                            near = column_neighbours(node, ranges, rq, cq)
                             margins.extend(abs(x - float(d)) - t_far for x in near)
-                            crossed_gap |= not any(abs(x - float(d)) < t_far for x in near)
+                            closed = any(abs(x - float(d)) < t_far for x in near)
+                            through = any(x > float(d) + t_far for x in near)
+                            crossed_gap |= through and not closed
                         continue  # a hole
                     tp = threshold if crossed_gap else t_far
                     dist = float(np.linalg.norm(pts[r, c] - pts[rq, cq]))
@@ -299,16 +298,23 @@ def test_two_people_one_metre_apart_stay_two_clusters(distance_m, behind):
 
 
 def _two_people_image(distance_m: float, gap_m: float):
-    """Two people side by side ``gap_m`` apart at ``distance_m``, nothing behind them and no
-    ground (the "No Ground" setting), cast with the sample's HDL-64E model at 2048 columns."""
-    from flic_cli.sample import HDL64_PITCH_DEG, Scene, cast
+    """Two people side by side ``gap_m`` apart at ``distance_m`` on a flat road, a facade 8 m
+    behind them, cast with the sample's HDL-64E model at 2048 columns; the ground's returns
+    removed as in the "No Ground" setting (between the legs the scan shows nothing, higher up
+    it sees the facade through the gap)."""
+    from flic_cli.classes import GROUND_CLASSES
+    from flic_cli.sample import HDL64_PITCH_DEG, Box, Ground, Scene, cast
 
     half = (gap_m + 0.5) / 2
     boxes = [_person(distance_m, -half, 1), _person(distance_m, half, 2)]
-    scene = Scene(0, 0, np.eye(3, 4), None, boxes, [])
+    boxes.append(Box((distance_m + 8.0, 0.0, 2.0), (0.2, 10.0, 5.0), 0.0, 50))
+    scene = Scene(0, 0, np.eye(3, 4), Ground.flat(), boxes, [])
     elevation = -np.radians(HDL64_PITCH_DEG)
     img0 = RangeImage(np.zeros((64, WIDTH), np.float32), elevation, np.zeros(0, np.int64), "x")
-    ranges, _, instance = cast(scene, HDL64_PITCH_DEG, img0.azimuth, np.random.default_rng(0))
+    ranges, semantic, instance = cast(
+        scene, HDL64_PITCH_DEG, img0.azimuth, np.random.default_rng(0)
+    )
+    ranges[np.isin(semantic, list(GROUND_CLASSES))] = 0.0
     return ranges.astype(np.float32), elevation, instance
 
 
@@ -327,8 +333,8 @@ def test_two_people_half_a_metre_apart_far_away_are_two_clusters(distance_m):
 def test_a_hole_in_a_surface_is_still_bridged_at_the_far_link_distance():
     # A wall at 20 m with 8 empty columns (0.49 m, below d sin(2 deg) = 0.70 m, above the
     # 0.35 m threshold): a band of missing returns with the wall above and below it is a hole
-    # in the wall and bridged; the same columns empty over the wall's whole height are a gap
-    # between two things.
+    # in the wall and bridged; the same columns empty over the wall's whole height, with a
+    # building seen through them above, are a gap between two things.
     ranges = wall(20.0, slice(100, 160))
     hole = ranges.copy()
     hole[26:34, 126:134] = 0.0
@@ -336,14 +342,54 @@ def test_a_hole_in_a_surface_is_still_bridged_at_the_far_link_distance():
     assert np.unique(labels[hole > 0]).size == 1
     gap = ranges.copy()
     gap[:, 126:134] = 0.0
+    gap[10:20, 120:140] = 45.0  # a building behind, seen above the wall
     labels = bridge_labels(gap, ELEVATION, min_size=1, fixed_side_gaps=True)
     assert labels[30, 110] > 0 and labels[30, 150] > 0 and labels[30, 110] != labels[30, 150]
-    assert np.unique(labels[gap > 0]).size == 2
+    assert np.unique(labels[gap == 20.0]).size == 2
     old = bridge_labels(gap, ELEVATION, min_size=1, fixed_side_gaps=False)
-    assert np.unique(old[gap > 0]).size == 1
+    assert np.unique(old[gap == 20.0]).size == 1
+    # with nothing seen through the gap's column there is no sign of free space: bridged
+    gap[10:20] = 0.0
+    labels = bridge_labels(gap, ELEVATION, min_size=1, fixed_side_gaps=True)
+    assert np.unique(labels[gap == 20.0]).size == 1
     # a hole whose column shows a farther thing above it (a window) and the wall below it is
     # still a hole in the wall
     window = hole.copy()
     window[20:26, 126:134] = 35.0
     labels = bridge_labels(window, ELEVATION, min_size=1, fixed_side_gaps=True)
     assert np.unique(labels[window == 20.0]).size == 1
+
+
+@st.composite
+def far_scenes(draw):
+    """2048-column images with a few far boxes side by side, holes, and background seen above
+    some gaps: the walks over open gaps and holes that ``fixed_side_gaps`` decides."""
+    h = draw(st.integers(4, 14))
+    rng = np.random.default_rng(draw(st.integers(0, 2**32 - 1)))
+    ranges = np.zeros((h, WIDTH), np.float32)
+    c = 0
+    for _ in range(draw(st.integers(1, 4))):
+        c += int(rng.integers(0, 10))
+        width = int(rng.integers(2, 12))
+        top = int(rng.integers(0, h - 1))
+        ranges[top:, c : c + width] = rng.uniform(12.0, 35.0)
+        c += width
+    back = rng.random((h, WIDTH)) < 0.5
+    back[int(rng.integers(1, h)) :] = False
+    ranges[(ranges == 0) & back] = 48.0
+    ranges *= 1.0 + rng.normal(0.0, 0.003, ranges.shape).astype(np.float32)
+    ranges[rng.random((h, WIDTH)) < draw(st.sampled_from([0.0, 0.1, 0.3]))] = 0.0
+    elevation = np.radians(np.linspace(2.0, 2.0 - 0.43 * (h - 1), h))
+    return ranges.astype(np.float32), elevation
+
+
+@settings(max_examples=60, deadline=None)
+@given(scene=far_scenes(), reach=st.sampled_from([4, 12]))
+def test_bridge_with_fixed_side_gaps_equals_its_graph_on_far_scenes(scene, reach):
+    ranges, elevation = scene
+    mask = np.ones(ranges.shape, bool)
+    edges, margins = bridge_graph(ranges, elevation, mask, 0.35, 2.0, reach, True)
+    assume(all(abs(m) > 1e-4 for m in margins))
+    expected = components(ranges.shape, ranges > 0, edges, np.ones(ranges.shape), 1)
+    got = bridge_labels(ranges, elevation, 0.35, 2.0, reach, 1, None, None, True)
+    np.testing.assert_array_equal(got, expected)
