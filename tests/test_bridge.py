@@ -16,11 +16,21 @@ LEFT, UP = (0, -1), (-1, 0)
 DIAGONALS = ((-1, -1), (-1, 1))
 
 
-def bridge_graph(ranges, elevation, mask, threshold, gamma_deg, reach):
+def column_neighbours(node, ranges, rq, cq):
+    """Ranges of the first node above and the first node below pixel (rq, cq) in its column
+    (the ones that exist)."""
+    h = node.shape[0]
+    up = next((ranges[r2, cq] for r2 in range(rq - 1, -1, -1) if node[r2, cq]), None)
+    down = next((ranges[r2, cq] for r2 in range(rq + 1, h) if node[r2, cq]), None)
+    return [float(x) for x in (up, down) if x is not None]
+
+
+def bridge_graph(ranges, elevation, mask, threshold, gamma_deg, reach, fixed_side_gaps=True):
     """Edges of the Bridge graph, walked exactly as the module docstring says.
 
     Returns the edges and, for every distance test made, ``distance - t_p`` (to stay away from
-    ties between float32 ranges and float64 coordinates).
+    ties between float32 ranges and float64 coordinates) and, for every gap test, the smallest
+    ``|range difference| - t_p`` over the column.
     """
     h, w = ranges.shape
     pts = xyz_of(ranges, elevation)
@@ -31,18 +41,29 @@ def bridge_graph(ranges, elevation, mask, threshold, gamma_deg, reach):
             if not node[r, c]:
                 continue
             d = ranges[r, c]
-            tp = max(threshold, float(d) * np.sin(np.radians(gamma_deg)))
+            t_far = max(threshold, float(d) * np.sin(np.radians(gamma_deg)))
             ends = {}
             for dr, dc in (LEFT, UP, *DIAGONALS):
                 if (dr, dc) in DIAGONALS and ends.get(LEFT) == 1 and ends.get(UP) == 1:
                     break  # inside a surface: no diagonal walks
                 k_max = min(reach, r if dr else reach, w - 1 if dc else reach)
+                crossed_gap = False  # an open gap (not a hole in p's surface) passed
                 for k in range(1, k_max + 1):
                     rq, cq = r + k * dr, (c + k * dc) % w
                     if not node[rq, cq]:
                         if ranges[rq, cq] > d:
                             break  # a range beyond p outside the mask: free space
+                        if fixed_side_gaps and dc != 0:
+                            # open: the first node above or below is beyond d + t_far (the
+                            # scan sees through the gap's column) and neither is within t_far
+                            # of d (a hole in p's surface would show p's surface)
+                            near = column_neighbours(node, ranges, rq, cq)
+                            margins.extend(abs(x - float(d)) - t_far for x in near)
+                            closed = any(abs(x - float(d)) < t_far for x in near)
+                            through = any(x > float(d) + t_far for x in near)
+                            crossed_gap |= through and not closed
                         continue  # a hole
+                    tp = threshold if crossed_gap else t_far
                     dist = float(np.linalg.norm(pts[r, c] - pts[rq, cq]))
                     margins.append(dist - tp)
                     if dist < tp:
@@ -61,14 +82,15 @@ def bridge_graph(ranges, elevation, mask, threshold, gamma_deg, reach):
     gamma=st.sampled_from([0.0, 1.0, 2.0, 5.0]),
     reach=st.integers(1, 20),
     min_size=st.integers(1, 10),
+    fixed=st.booleans(),
 )
-def test_bridge_equals_components_of_its_graph(scene, threshold, gamma, reach, min_size):
+def test_bridge_equals_components_of_its_graph(scene, threshold, gamma, reach, min_size, fixed):
     ranges, elevation, mask, weights = scene
-    edges, margins = bridge_graph(ranges, elevation, mask, threshold, gamma, reach)
+    edges, margins = bridge_graph(ranges, elevation, mask, threshold, gamma, reach, fixed)
     assume(all(abs(m) > 1e-4 for m in margins))
     node = mask & (ranges > 0)
     expected = image_components(ranges.shape, node, edges, min_size, weights)
-    got = bridge_labels(ranges, elevation, threshold, gamma, reach, min_size, mask, weights)
+    got = bridge_labels(ranges, elevation, threshold, gamma, reach, min_size, mask, weights, fixed)
     np.testing.assert_array_equal(got, expected)
 
 
@@ -89,11 +111,11 @@ def test_bridge_gives_the_labels_of_the_previous_kernel(
     mask = mask if masked else None
     weights = weights if weighted else None
     np.testing.assert_array_equal(
-        bridge_labels(ranges, elevation, threshold, gamma, reach, min_size, mask, weights),
+        bridge_labels(ranges, elevation, threshold, gamma, reach, min_size, mask, weights, False),
         reference_kernels.bridge_labels(
             ranges, elevation, threshold, gamma, reach, min_size, mask, weights
         ),
-    )
+    )  # the rule for gaps beside (fixed_side_gaps) came after that kernel
 
 
 @settings(max_examples=200, deadline=None)
@@ -195,9 +217,9 @@ def _person(x: float, y: float, instance: int):
     return Box((x, y, -SENSOR_HEIGHT_M + 0.875), (0.175, 0.25, 0.875), 0.0, 30, instance)
 
 
-# Beyond about 14 m the link distance d sin(2 deg) exceeds the 0.5 m gap and, where only holes
-# (removed ground, sky) lie between them, two such people join (DBSCAN with eps 0.5 m is no
-# different); the sample's sidewalks lie 5-12 m from the sensor.
+# Beyond about 14 m the link distance d sin(2 deg) exceeds the 0.5 m gap; where only holes
+# (removed ground, sky) lie between them, two such people join unless fixed_side_gaps is set
+# (test_two_people_half_a_metre_apart_far_away_are_two_clusters; results/bridge-cases/).
 @pytest.mark.parametrize("distance_m", [6.0, 9.0, 12.0])
 @pytest.mark.parametrize("behind", ["nothing", "facade"])
 def test_two_people_one_metre_apart_stay_two_clusters(distance_m, behind):
@@ -224,3 +246,101 @@ def test_two_people_one_metre_apart_stay_two_clusters(distance_m, behind):
     lb = np.bincount(b).argmax()
     assert la > 0 and lb > 0 and la != lb
     assert (a == la).mean() > 0.95 and (b == lb).mean() > 0.95
+
+
+def _two_people_image(distance_m: float, gap_m: float):
+    """Two people side by side ``gap_m`` apart at ``distance_m`` on a flat road, a facade 8 m
+    behind them, cast with the sample's HDL-64E model at 2048 columns; the ground's returns
+    removed as in the "No Ground" setting (between the legs the scan shows nothing, higher up
+    it sees the facade through the gap)."""
+    from flic_cli.classes import GROUND_CLASSES
+    from flic_cli.sample import HDL64_PITCH_DEG, Box, Ground, Scene, cast
+
+    half = (gap_m + 0.5) / 2
+    boxes = [_person(distance_m, -half, 1), _person(distance_m, half, 2)]
+    boxes.append(Box((distance_m + 8.0, 0.0, 2.0), (0.2, 10.0, 5.0), 0.0, 50))
+    scene = Scene(0, 0, np.eye(3, 4), Ground.flat(), boxes, [])
+    elevation = -np.radians(HDL64_PITCH_DEG)
+    img0 = RangeImage(np.zeros((64, WIDTH), np.float32), elevation, np.zeros(0, np.int64), "x")
+    ranges, semantic, instance = cast(
+        scene, HDL64_PITCH_DEG, img0.azimuth, np.random.default_rng(0)
+    )
+    ranges[np.isin(semantic, list(GROUND_CLASSES))] = 0.0
+    return ranges.astype(np.float32), elevation, instance
+
+
+@pytest.mark.parametrize("distance_m", [20.0, 25.0])
+def test_two_people_half_a_metre_apart_far_away_are_two_clusters(distance_m):
+    ranges, elevation, instance = _two_people_image(distance_m, 0.5)
+    for fixed, apart in ((True, True), (False, False)):  # the rule before joined them
+        labels = bridge_labels(ranges, elevation, min_size=10, fixed_side_gaps=fixed)
+        a, b = labels[instance == 1], labels[instance == 2]
+        assert a.size > 40 and b.size > 40
+        la, lb = np.bincount(a).argmax(), np.bincount(b).argmax()
+        assert la > 0 and lb > 0 and (a == la).all() and (b == lb).all()
+        assert (la != lb) == apart
+
+
+def test_a_hole_in_a_surface_is_still_bridged_at_the_far_link_distance():
+    # A wall at 20 m with 8 empty columns (0.49 m, below d sin(2 deg) = 0.70 m, above the
+    # 0.35 m threshold): a band of missing returns with the wall above and below it is a hole
+    # in the wall and bridged; the same columns empty over the wall's whole height, with a
+    # building seen through them above, are a gap between two things.
+    ranges = wall(20.0, slice(100, 160))
+    hole = ranges.copy()
+    hole[26:34, 126:134] = 0.0
+    labels = bridge_labels(hole, ELEVATION, min_size=1, fixed_side_gaps=True)
+    assert np.unique(labels[hole > 0]).size == 1
+    gap = ranges.copy()
+    gap[:, 126:134] = 0.0
+    gap[10:20, 120:140] = 45.0  # a building behind, seen above the wall
+    labels = bridge_labels(gap, ELEVATION, min_size=1, fixed_side_gaps=True)
+    assert labels[30, 110] > 0 and labels[30, 150] > 0 and labels[30, 110] != labels[30, 150]
+    assert np.unique(labels[gap == 20.0]).size == 2
+    old = bridge_labels(gap, ELEVATION, min_size=1, fixed_side_gaps=False)
+    assert np.unique(old[gap == 20.0]).size == 1
+    # with nothing seen through the gap's column there is no sign of free space: bridged
+    gap[10:20] = 0.0
+    labels = bridge_labels(gap, ELEVATION, min_size=1, fixed_side_gaps=True)
+    assert np.unique(labels[gap == 20.0]).size == 1
+    # a hole whose column shows a farther thing above it (a window) and the wall below it is
+    # still a hole in the wall
+    window = hole.copy()
+    window[20:26, 126:134] = 35.0
+    labels = bridge_labels(window, ELEVATION, min_size=1, fixed_side_gaps=True)
+    assert np.unique(labels[window == 20.0]).size == 1
+
+
+@st.composite
+def far_scenes(draw):
+    """2048-column images with a few far boxes side by side, holes, and background seen above
+    some gaps: the walks over open gaps and holes that ``fixed_side_gaps`` decides."""
+    h = draw(st.integers(4, 14))
+    rng = np.random.default_rng(draw(st.integers(0, 2**32 - 1)))
+    ranges = np.zeros((h, WIDTH), np.float32)
+    c = 0
+    for _ in range(draw(st.integers(1, 4))):
+        c += int(rng.integers(0, 10))
+        width = int(rng.integers(2, 12))
+        top = int(rng.integers(0, h - 1))
+        ranges[top:, c : c + width] = rng.uniform(12.0, 35.0)
+        c += width
+    back = rng.random((h, WIDTH)) < 0.5
+    back[int(rng.integers(1, h)) :] = False
+    ranges[(ranges == 0) & back] = 48.0
+    ranges *= 1.0 + rng.normal(0.0, 0.003, ranges.shape).astype(np.float32)
+    ranges[rng.random((h, WIDTH)) < draw(st.sampled_from([0.0, 0.1, 0.3]))] = 0.0
+    elevation = np.radians(np.linspace(2.0, 2.0 - 0.43 * (h - 1), h))
+    return ranges.astype(np.float32), elevation
+
+
+@settings(max_examples=60, deadline=None)
+@given(scene=far_scenes(), reach=st.sampled_from([4, 12]))
+def test_bridge_with_fixed_side_gaps_equals_its_graph_on_far_scenes(scene, reach):
+    ranges, elevation = scene
+    mask = np.ones(ranges.shape, bool)
+    edges, margins = bridge_graph(ranges, elevation, mask, 0.35, 2.0, reach, True)
+    assume(all(abs(m) > 1e-4 for m in margins))
+    expected = image_components(ranges.shape, ranges > 0, edges, 1, np.ones(ranges.shape))
+    got = bridge_labels(ranges, elevation, 0.35, 2.0, reach, 1, None, None, True)
+    np.testing.assert_array_equal(got, expected)
