@@ -148,3 +148,21 @@ def test_evaluate_records_the_derived_parameters(tmp_path: Path, vlp16: sample.S
     run = json.loads((tmp_path / "e" / "run.json").read_text())
     table = json.dumps(run)
     assert '"gamma_deg": 3.0' in table and '"threshold_m": 0.52' in table
+
+
+@pytest.mark.parametrize(
+    ("path", "bridge"),
+    [
+        ("sensors/velodyne/vlp16_velodyne_example.pcap", Bridge(gamma_deg=3.0, threshold_m=0.52)),
+        ("sensors/ouster/OS-2-128-U1_v2.3.0_1024x10.pcap", Bridge()),
+        ("semantickitti/sequences/00", Bridge()),
+    ],
+)
+def test_real_recordings_derive_from_their_sensor_model(
+    shared_data: Path, path: str, bridge: Bridge
+) -> None:
+    """The VLP-16 capture's decoder table (2 deg beams) derives Bridge's VLP-16 values; the
+    OS-2-128's metadata and the SemanticKITTI scans' recovered rows keep the defaults."""
+    config = load_config()
+    ds = open_dataset(shared_data / path, None, (0, 1))
+    assert for_dataset(config, ds, ds.refs()).methods["bridge"].method == bridge
