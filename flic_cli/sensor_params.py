@@ -41,6 +41,7 @@ __all__ = [
     "beams_of_dataset",
     "bridge_parameters",
     "column_run_jumps",
+    "derived_lines",
     "derived_parameters",
     "for_beams",
     "for_dataset",
@@ -251,3 +252,23 @@ def for_dataset(config: Config, ds: Any, refs: list) -> Config:
     different sensors takes the first selected one's (run them one by one otherwise)."""
     beams = beams_of_dataset(ds, refs, config.projection)
     return config if beams is None else for_beams(config, beams)[0]
+
+
+def derived_lines(beams: BeamTable, config: Config | None = None) -> list[str]:
+    """What a run derives from ``beams`` with ``config`` (the shipped presets when None), as
+    ``flic info`` prints it: Bridge's link distances and column's run limits."""
+    from flic_cli.config.parser import load_config
+
+    config = load_config() if config is None else config
+    applied = for_beams(config, beams)[1]
+    bridge = {tuple(sorted(v.items())) for k, v in applied.items()}
+    text = "; ".join(", ".join(f"{k} = {v:g}" for k, v in b) for b in sorted(bridge))
+    lines = [f"derived for Bridge: {text}" if text else "derived for Bridge: its defaults"]
+    jumps = column_run_jumps(beams.elevation)
+    raised = int(np.count_nonzero(jumps > RUN_JUMP_FLOOR))
+    lines.append(
+        f"derived for column: run limit above {raised} row(s) raised to at most {jumps.max():.3g}"
+        if raised
+        else f"derived for column: run limit {RUN_JUMP_FLOOR:g} on every row"
+    )
+    return lines

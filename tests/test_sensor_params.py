@@ -166,3 +166,15 @@ def test_real_recordings_derive_from_their_sensor_model(
     config = load_config()
     ds = open_dataset(shared_data / path, None, (0, 1))
     assert for_dataset(config, ds, ds.refs()).methods["bridge"].method == bridge
+
+
+def test_info_prints_what_runs_derive(shared_data: Path) -> None:
+    sensors = shared_data / "sensors"
+    result = runner.invoke(app, ["info", str(sensors / "velodyne/vlp16_velodyne_example.pcap")])
+    assert result.exit_code == 0, result.output
+    assert "derived for Bridge: gamma_deg = 3, threshold_m = 0.52" in result.output
+    assert "derived for column: run limit above 4 row(s) raised to at most 0.769" in result.output
+    result = runner.invoke(app, ["info", str(sensors / "ouster/OS-2-128-U1_v2.3.0_1024x10.pcap")])
+    assert result.exit_code == 0, result.output
+    assert "derived for Bridge: its defaults" in result.output
+    assert "derived for column: run limit 0.3 on every row" in result.output
