@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import dataclasses
 import functools
+import warnings
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
@@ -233,15 +234,17 @@ def beams_of_dataset(ds: Any, refs: list, projection: Any) -> BeamTable | None:
     if not refs:
         return None
     try:
-        frame = ds.load(refs[0])
+        with warnings.catch_warnings():  # the run reads the frame again and warns then
+            warnings.simplefilter("ignore")
+            frame = ds.load(refs[0])
+            image = frame.image if frame.image is not None else projection(frame.points)
     except FlicInputError:
         return None
     if frame.image is not None:
         model = ds.sensor(refs[0]) if hasattr(ds, "sensor") else None
         how = getattr(model, "angles_from", None)
         source = f"sensor model ({how})" if how else "the reader's range image"
-        return BeamTable.of_image(frame.image, source)
-    image = projection(frame.points)
+        return BeamTable.of_image(image, source)
     return BeamTable.of_image(image, f"{image.projection} projection of the first frame")
 
 
