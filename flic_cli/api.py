@@ -27,7 +27,7 @@ import numpy as np
 
 from flic_cli.config import Config, load_config
 from flic_cli.io.base import Frame, FrameRef
-from flic_cli.range_image import from_sensor_image
+from flic_cli.range_image import RangeImage, from_sensor_image
 from flic_cli.runs.pipeline import OWN, Segmenter, build_segmenter, prepare
 from flic_cli.runs.spec import BenchmarkRun, EvaluateRun, SegmentRun, Selection, SweepRun
 
@@ -51,8 +51,16 @@ def _config(config: Config | str | Path | None) -> Config:
     return config if isinstance(config, Config) else load_config(config)
 
 
-def _segmenter(cfg: Config, method: str, ground: str | None) -> Segmenter:
-    """The method with its ground remover (none when ``ground`` is None)."""
+def _segmenter(
+    cfg: Config, method: str, ground: str | None, image: RangeImage | None = None
+) -> Segmenter:
+    """The method with its ground remover (none when ``ground`` is None), with the parameters
+    that follow the sensor derived from ``image``'s rows and columns
+    (:func:`flic_cli.sensor_params.for_beams`) unless the config sets them."""
+    if image is not None:
+        from flic_cli.sensor_params import BeamTable, for_beams
+
+        cfg = for_beams(cfg, BeamTable.of_image(image))[0]
     if ground is None:
         return build_segmenter(cfg, method, "no-ground")  # the "no-ground" segmenter has none
     return build_segmenter(cfg, method, "ground", ground)
@@ -173,7 +181,7 @@ def segment_points(
     if not scan_order:
         projection = dataclasses.replace(projection, mode="spherical")
     prep = prepare(frame, "ground", projection)
-    labels, _ = _segmenter(cfg, method, ground)(prep.image, prep.points)
+    labels, _ = _segmenter(cfg, method, ground, prep.image)(prep.image, prep.points)
     return prep.scan_labels(labels).astype(np.int32, copy=False)
 
 
@@ -199,7 +207,7 @@ def segment_frame(
     """
     cfg = _config(config)
     prep = prepare(frame, "ground", cfg.projection)
-    labels, _ = _segmenter(cfg, method, ground)(prep.image, prep.points)
+    labels, _ = _segmenter(cfg, method, ground, prep.image)(prep.image, prep.points)
     return prep.scan_labels(labels).astype(np.int32, copy=False)
 
 
@@ -229,7 +237,7 @@ def segment_range_image(
     ref = FrameRef("array", 0, Path("<array>"), None, "array")
     frame = Frame(ref, image.to_points()[image.point_pixel], None, image)
     prep = prepare(frame, "ground", cfg.projection)
-    labels, _ = _segmenter(cfg, method, ground)(prep.image, prep.points)
+    labels, _ = _segmenter(cfg, method, ground, prep.image)(prep.image, prep.points)
     out = np.zeros(image.ranges.size, dtype=np.int32)
     out[image.point_pixel] = labels
     return out.reshape(image.ranges.shape)

@@ -12,7 +12,18 @@ then the paired differences (``scripts/paired_differences.py``), and gathers:
   FLIC's threshold (0.8 m) can link two rays ``k`` rows or columns apart on a surface facing the
   sensor (``t / (2 sin(k * step / 2))``), for the direct links (k = 1) and the Map Connections'
   smallest and largest steps (2 and 15);
-- ``OUT/iou_per_sensor.png``: IoU_mu per method across the sensors (both settings).
+- ``OUT/iou_per_sensor.png``: IoU_mu per method across the sensors (both settings);
+- ``OUT/summary.csv`` (and printed): per sensor and setting, the paired differences the issue's
+  targets ask about, where both methods ran: Bridge minus DBSCAN, and FLIC with 1 / 6 / 14 Map
+  Connections minus FLIC 0 MC, with their 95 % intervals (``differences.csv``), and the over- /
+  under-segmented objects of each.
+
+Bridge against DBSCAN and what the Map Connections add, on 20 frames of every sensor (one
+command; every method's sensor-dependent parameters derived from the data, as every run does)::
+
+    python scripts/sensors_synthetic.py --frames 20 \
+        --methods flic0,flic1,flic6,flic14,bridge,dbscan \
+        --out results/sensors-synthetic/derived-20frames --work /tmp/flic-s20
 
 Usage (from the repository root, ``../shared`` not needed)::
 
@@ -70,12 +81,13 @@ def run_sensor(
     methods: str | None,
     extra: Path | None,
     ground_remover: str | None = None,
+    jobs: int = 1,
 ) -> None:
     """Write the sensor's street, evaluate it, and the paired differences, into ``out/<name>``."""
     paths = write_sample(work / name, frames=frames, seed=0, sensor=name)
     config = _merged_config(paths.config, extra, work / f"{name}.config.toml")
     cmd = ["flic", "evaluate", str(paths.kitti_root), "--setting", "both"]
-    cmd += ["--frames", f"0:{frames}", "--out", str(out / name)]
+    cmd += ["--frames", f"0:{frames}", "--out", str(out / name), "--jobs", str(jobs)]
     if config is not None:
         cmd += ["--config", str(config)]
     if methods:
@@ -150,6 +162,47 @@ def gather(out: Path) -> pd.DataFrame:
     return combined[[c for c in keep if c in combined.columns]]
 
 
+#: (method, minus) pairs of ``summary.csv``.
+SUMMARY_PAIRS = (("bridge", "dbscan"), ("flic1", "flic0"), ("flic6", "flic0"), ("flic14", "flic0"))
+
+
+def summary(out: Path, combined: pd.DataFrame) -> pd.DataFrame:
+    """Per sensor and setting, :data:`SUMMARY_PAIRS`' IoU_mu differences with their paired 95 %
+    intervals (from ``out/<sensor>/differences.csv``; a pair stored the other way round is
+    negated), and each method's over- / under-segmented objects."""
+    rows = []
+    for name in SENSOR_PROFILES:
+        path = out / name / "differences.csv"
+        if not path.is_file():
+            continue
+        diff = pd.read_csv(path)
+        diff = diff[diff["score"] == "iou_mu"]
+        for setting in ("no-ground", "ground"):
+            d = diff[diff["setting"] == setting]
+            seg = combined[(combined["sensor"] == name) & (combined["setting"] == setting)]
+            seg = seg.set_index("method")
+            for a, b in SUMMARY_PAIRS:
+                hit = d[(d["method"] == a) & (d["minus"] == b)]
+                sign = 1.0
+                if hit.empty:
+                    hit, sign = d[(d["method"] == b) & (d["minus"] == a)], -1.0
+                if hit.empty:
+                    continue
+                r = hit.iloc[0]
+                low, high = sorted((sign * r["low"], sign * r["high"]))
+                row = {"sensor": name, "setting": setting, "method": a, "minus": b}
+                row |= {"difference": round(sign * r["difference"], 2), "low": low, "high": high}
+                row["significant"] = bool(r["significant"])
+                for m, tag in ((a, "method"), (b, "minus")):
+                    if m in seg.index and "over_segmented" in seg.columns:
+                        row[f"{tag}_over_under"] = (
+                            f"{int(seg.loc[m, 'over_segmented'])} / "
+                            f"{int(seg.loc[m, 'under_segmented'])}"
+                        )
+                rows.append(row)
+    return pd.DataFrame(rows)
+
+
 def plot(combined: pd.DataFrame, path: Path) -> None:
     """IoU_mu per method (lines) across the sensors (x, fewest beams first), both settings."""
     plt = _pyplot()
@@ -190,6 +243,7 @@ def main() -> None:
     ap.add_argument("--methods", default=None)
     ap.add_argument("--extra-config", type=Path, default=None)
     ap.add_argument("--ground-remover", default=None, help="of the ground setting (default: paper)")
+    ap.add_argument("--jobs", type=int, default=1, help="evaluate's worker processes")
     ap.add_argument("--gather-only", action="store_true")
     args = ap.parse_args()
     if not args.gather_only:
@@ -204,13 +258,18 @@ def main() -> None:
                 args.methods,
                 args.extra_config,
                 args.ground_remover,
+                args.jobs,
             )
     args.out.mkdir(parents=True, exist_ok=True)
     write_table(args.out / "geometry.csv", geometry())
     combined = gather(args.out)
     write_table(args.out / "combined.csv", combined)
     plot(combined, args.out / "iou_per_sensor.png")
-    print(f"wrote {args.out}/combined.csv, geometry.csv, iou_per_sensor.png")
+    table = summary(args.out, combined)
+    if not table.empty:
+        write_table(args.out / "summary.csv", table)
+        print(table.to_string(index=False))
+    print(f"wrote {args.out}/combined.csv, geometry.csv, iou_per_sensor.png, summary.csv")
 
 
 if __name__ == "__main__":

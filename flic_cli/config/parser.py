@@ -141,7 +141,7 @@ def parse_config(raw: dict[str, Any], files: tuple[Path, ...] = ()) -> Config:
             )
         params = {k: v for k, v in table.items() if k not in METHOD_KEYS}
         method = _build(KINDS[kind], params, f"[methods.{name}]", fail)
-        methods[name] = MethodSpec(name, kind, method, own)
+        methods[name] = MethodSpec(name, kind, method, own, frozenset(params))
 
     default_methods = raw.get("default_methods", list(methods))
     if not isinstance(default_methods, list) or not all(

@@ -33,12 +33,16 @@ class MethodSpec:
     kind : the method kind (``"flic"``, ``"bogoslavskyi"``, ``"dbscan"``, ...).
     method : the built component (see :class:`flic_cli.methods.base.Method`).
     ground : the variant's own ground remover (a key of :data:`flic_cli.ground.REMOVERS`).
+    given : the parameters a config file sets for the variant (``like`` included); the others
+        are the component's defaults, which :mod:`flic_cli.sensor_params` may derive from the
+        data's sensor.
     """
 
     name: str
     kind: str
     method: Any
     ground: str
+    given: frozenset[str] = frozenset()
 
     def as_table(self) -> dict[str, Any]:
         """The variant as a complete config table (every parameter, defaults included)."""

@@ -117,7 +117,8 @@ _FAR_DR_M = 0.5  # beyond this gap a continuation checks the cell above for an o
 _RUN_CELLS = 3  # cells above that confirm a step or a seed
 _RUN_MIN_CELLS = 2  # ...at least this many of them
 _RUN_ROWS = 6  # ...found within this many rows
-_RUN_JUMP = 0.3  # a cell farther than this share of rho ends the run (a depth jump)
+_RUN_JUMP = 0.3  # a cell farther than this share of rho ends the run (a depth jump); the floor
+# of the per-row limits that follow the beam table (flic_cli.sensor_params.column_run_jumps)
 _OCCLUDER_M = 0.15  # a cell above nearer by more than this (+2 % of rho) occludes the cell
 _OCCLUDER_REL = 0.02
 _GAIN_HEIGHT = 0.5  # alpha-beta filter of the ground model
@@ -276,12 +277,15 @@ def _column_ground(
     up_rho: np.ndarray,
     up_z: np.ndarray,
     p: np.ndarray,
+    jumps: np.ndarray,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """The remover on one image given its geometry (:func:`pixel_geometry`): horizontal range
     and height of every pixel and of the next valid cell above it; ``p`` holds the parameters in
-    the ``_P_*`` layout. Returns the ground mask, the held cells (step 6's stood-on cells,
-    step 8), and per held cell, in the order found (rows from the bottom), its flat pixel index
-    and that of the cell standing on it if within ``attach_m`` of it, else -1.
+    the ``_P_*`` layout, ``jumps`` (H,) the run's depth-jump limit from each row to the next
+    valid cell above (a share of ``rho``; :func:`flic_cli.sensor_params.column_run_jumps`).
+    Returns the ground mask, the held cells (step 6's stood-on cells, step 8), and per held cell,
+    in the order found (rows from the bottom), its flat pixel index and that of the cell
+    standing on it if within ``attach_m`` of it, else -1.
 
     Every row, from the bottom, in three passes: steps 1, 2 and 5 for every column in vector
     code (:func:`_columns_row`); then the cells that step 3 or 4 asks about, one by one (the set
@@ -364,6 +368,7 @@ def _column_ground(
                 s = -1
                 n = 0
                 prev = rho
+                prev_jump = jumps[np.uintp(r)]
                 run_rho = rho
                 run_z = z
                 lo = r - 1 - _RUN_ROWS
@@ -375,7 +380,7 @@ def _column_ground(
                     if ra_rho <= 0.0:
                         continue
                     ra_z = z_img[ua, uc]
-                    if ra_rho < prev - _BEHIND_M or ra_rho > prev + _RUN_JUMP * prev:
+                    if ra_rho < prev - _BEHIND_M or ra_rho > prev + prev_jump * prev:
                         if n == 0:
                             s = 2 if ra_rho < prev - _OCCLUDER_M - _OCCLUDER_REL * prev else 0
                         break
@@ -385,6 +390,7 @@ def _column_ground(
                         s = 0
                         break
                     prev = ra_rho
+                    prev_jump = jumps[ua]
                     run_rho = ra_rho
                     run_z = ra_z
                     n += 1
@@ -694,6 +700,11 @@ class ColumnGround:
         the clustering and join the cluster of the cell that stands on them afterwards
         (False: they are clustered like any object cell).
     attach_m : a held cell joins the cell standing on it only within this distance, metres.
+    run_jump : a step's or seed's confirming run ends at a cell farther than this share of the
+        previous cell's ``rho`` (a depth jump), on every row; None (the default): per row, from
+        the beam table, the growth of the ground's range to the next beam up plus a margin, at
+        least 0.3 (:func:`flic_cli.sensor_params.column_run_jumps`; 0.3 on every row of the
+        HDL-64E).
     point_heights : on projected scans, every pixel at its nearest point's height (False: at its
         range along its row's elevation, as on a sensor's own image; see
         :func:`pixel_geometry`).
@@ -716,6 +727,7 @@ class ColumnGround:
     point_heights: bool = True
     hold_feet: bool = True
     attach_m: Annotated[float, Field(gt=0, description="metres")] = 1.5
+    run_jump: Annotated[float, Field(gt=0, le=10, description="share of rho")] | None = None
 
     def extract(self, image: RangeImage, points: np.ndarray | None = None) -> Ground:
         """The remover's decision on a scan (module docstring): the ground mask (steps 1-6),
@@ -730,7 +742,7 @@ class ColumnGround:
             step 7 only (a projected scan), None elsewhere.
         """
         mask, held, cells, standers = _column_ground(
-            *pixel_geometry(image, self.point_heights), _param_vector(self)
+            *pixel_geometry(image, self.point_heights), _param_vector(self), self.run_jumps(image)
         )
         decided, clustered = None, image
         per_point = self.point_ground(image, points, mask)
@@ -746,6 +758,16 @@ class ColumnGround:
             image.shape[1],
         )  # fmt: skip
         return Ground(mask, clustered, decided, held, attached)
+
+    def run_jumps(self, image: RangeImage) -> np.ndarray:
+        """(H,) float64 depth-jump limit of the run above each row of ``image`` (a share of
+        ``rho``): :attr:`run_jump` on every row, or where it is None, from the image's row
+        elevations (:func:`flic_cli.sensor_params.column_run_jumps`, cached per beam table)."""
+        if self.run_jump is not None:
+            return np.full(image.shape[0], float(self.run_jump))
+        from flic_cli.sensor_params import column_run_jumps
+
+        return column_run_jumps(image.elevation, float(self.sensor_height_m))
 
     def point_ground(
         self, image: RangeImage, points: np.ndarray | None, mask: np.ndarray

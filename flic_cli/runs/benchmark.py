@@ -87,6 +87,7 @@ from flic_cli.runs.pipeline import (
     prepared_semantics,
 )
 from flic_cli.runs.spec import BenchmarkRun
+from flic_cli.sensor_params import for_dataset
 
 #: Speed-ups measured on fewer frames than this are printed as an indication only.
 FEW_FRAMES = 30
@@ -434,6 +435,7 @@ def run_benchmark(spec: BenchmarkRun) -> BenchmarkResult:
     )
     refs = ds.refs()
     out = check_output_dir(Path(out), ds.folders())
+    config = for_dataset(config, ds, refs)  # the sensor's derived parameters
     segs = build_segmenters(config, methods, setting, ground_remover)
     index = {r: k for k, r in enumerate(refs)}
     every = {s.name: slow_every if getattr(s.method, "slow", False) else 1 for s in segs}

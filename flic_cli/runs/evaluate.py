@@ -58,6 +58,7 @@ from flic_cli.runs.tables import (
     panoptic_dtypes,
     shown_table,
 )
+from flic_cli.sensor_params import for_dataset
 
 #: ``--setting`` of evaluate: one setting or both in one pass (each frame read once).
 EVAL_SETTINGS: dict[str, tuple[str, ...]] = {
@@ -251,7 +252,9 @@ def run_evaluate(spec: EvaluateRun) -> EvaluateResult:
     methods = list(dict.fromkeys(spec.methods))
     ds, refs, missing = select_labelled(sel.data, sel.sequences, sel.frames, spec.skip_missing)
     out = check_output_dir(Path(spec.out), ds.folders())
-    # 2. the segmenters, built once and sent to every worker
+    # 2. the segmenters, built once (with the sensor's derived parameters) and sent to every
+    #    worker
+    config = for_dataset(config, ds, refs)
     job = ScoreJob(
         ds,
         tuple((s, tuple(build_segmenters(config, methods, s, ground_remover))) for s in settings),

@@ -46,6 +46,7 @@ from flic_cli.runs.pipeline import (
     segment_with,
 )
 from flic_cli.runs.spec import SegmentRun
+from flic_cli.sensor_params import for_dataset
 
 #: ``--semantics`` values besides a folder of a semantic network's predictions.
 SEMANTICS = ("none", "oracle")
@@ -195,6 +196,7 @@ def run_segment(spec: SegmentRun) -> SegmentSummary:
     needs_own = [e for e in export if e in own_exports]
     if needs_own and needs_own[0] not in registry.FORMATS[ds.format].exports:
         raise FlicInputError(sel.data, f"--export {needs_own[0]} needs a bag or MCAP input")
+    config = for_dataset(config, ds, refs)  # the sensor's derived parameters
     seg = build_segmenter(config, method, setting, sel.remover_or(OWN))
     job = SegmentJob(ds, seg, setting, config.projection, wanted)
     loop = FrameLoop(job, refs, sel.jobs, None, sel.skip_bad, f"segment {method}", sel.progress)

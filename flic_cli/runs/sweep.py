@@ -27,6 +27,7 @@ from flic_cli.runs.pipeline import Segmenter, build_segmenter, prepare, prepared
 from flic_cli.runs.scoring import load_labelled_frame
 from flic_cli.runs.spec import SweepRun
 from flic_cli.runs.tables import percent
+from flic_cli.sensor_params import for_dataset
 
 #: Columns of ``sweep.csv`` (scores in percent).
 SWEEP_COLUMNS: tuple[str, ...] = (
@@ -155,6 +156,11 @@ def run_sweep(spec: SweepRun) -> SweepResult:
     # every value is validated here, before any frame is read
     segmenters = tuple(base.with_param(float(v)) for v in values)
     ds, refs, missing = select_labelled(sel.data, sel.sequences, sel.frames, spec.skip_missing)
+    derived = for_dataset(config, ds, refs)  # the sensor's derived parameters
+    if derived is not config:
+        config = derived
+        base = build_segmenter(config, method, setting, sel.remover_or("paper"))
+        segmenters = tuple(base.with_param(float(v)) for v in values)
     job = SweepJob(ds, segmenters, setting, config.projection)
     out = check_output_dir(Path(spec.out), ds.folders())
 

@@ -113,9 +113,10 @@ with another sensor's beam table and columns (:data:`SENSOR_PROFILES`: ``vlp16``
 ``hdl32e``, ``hdl64e`` (the default), ``os1-64``, ``os1-128``, ``os2-128``; where each table comes
 from is in its :attr:`SensorProfile.source`), as the SemanticKITTI sequence alone, with
 ``out/sensor.toml`` beside it: the ``[projection]`` table (rows = beams, width = columns) with
-which ``flic ... --config out/sensor.toml`` reads the sequence, and the Bridge parameters that
-follow the beam gap (:func:`flic_cli.sensor_params.bridge_parameters`) where they differ from the
-defaults. The default profile writes exactly the sample described above.
+which ``flic ... --config out/sensor.toml`` reads the sequence, and in a comment the Bridge
+parameters that follow the beam gap (:func:`flic_cli.sensor_params.bridge_parameters`), which
+every run derives from the data's rows itself (:func:`flic_cli.sensor_params.for_dataset`). The
+default profile writes exactly the sample described above.
 """
 
 from __future__ import annotations

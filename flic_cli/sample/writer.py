@@ -199,11 +199,11 @@ def sensor_toml(profile: SensorProfile, width: int | None = None) -> str:
     if bridge:
         gap = street_beam_gap_deg(elevation)
         text += (
-            "\n# Bridge's link distances from the beam gap (flic_cli.sensor_params."
-            "bridge_parameters):\n"
-            f"# gamma = max(2 deg, {BRIDGE_GAPS_PER_GAMMA:g} x {gap:.3f} deg), threshold = "
-            f"max(0.35 m, {BRIDGE_SWITCH_M:g} m x sin(gamma))\n"
-            "[methods.bridge]\n" + "".join(f"{k} = {v!r}\n" for k, v in bridge.items())
+            "\n# flic derives the parameters that follow the beam table when it reads the data\n"
+            "# (flic_cli.sensor_params; set them in a [methods.NAME] table here to override).\n"
+            f"# Here: Bridge's gamma = max(2 deg, {BRIDGE_GAPS_PER_GAMMA:g} x {gap:.3f} deg), "
+            f"threshold = max(0.35 m, {BRIDGE_SWITCH_M:g} m x sin(gamma)):\n"
+            "# " + ", ".join(f"{k} = {v!r}" for k, v in bridge.items()) + "\n"
         )
     return text
 
