@@ -349,3 +349,25 @@ def test_segment_needs_semantics_for_alpine(sample_root, tmp_path) -> None:  # n
     assert bad.exit_code == 2 and "--semantics" in bad.output
     good = runner.invoke(app, [*base, "--semantics", "oracle", "--out", str(tmp_path / "b")])
     assert good.exit_code == 0, good.output
+
+
+def test_default_methods_with_semantics_add_the_per_class_ones(tmp_path) -> None:  # noqa: ANN001
+    """Without --methods, `evaluate --semantics oracle` runs `default_methods` and then
+    `default_semantic_methods`; a config naming an unknown variant there is refused."""
+    from flic_cli.config import load_config
+    from flic_cli.runs.pipeline import parse_methods
+
+    cfg = load_config(None)
+    plain = parse_methods(None, cfg)
+    with_sem = parse_methods(None, cfg, semantics=True)
+    assert plain == list(cfg.default_methods) and "alpine" not in plain
+    assert with_sem == plain + [m for m in cfg.default_semantic_methods if m not in plain]
+    assert {"alpine", "alpine-k32"} <= set(with_sem)
+    assert parse_methods("slr", cfg, semantics=True) == ["slr"]  # --methods wins
+    own = tmp_path / "own.toml"
+    own.write_text('default_semantic_methods = ["slr", "flic0-scipy"]\n')
+    assert parse_methods(None, load_config(own), semantics=True) == [*plain, "flic0-scipy"]
+    bad = tmp_path / "bad.toml"
+    bad.write_text('default_semantic_methods = ["nothing"]\n')
+    with pytest.raises(FlicInputError, match="default_semantic_methods"):
+        load_config(bad)

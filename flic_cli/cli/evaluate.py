@@ -138,7 +138,7 @@ def evaluate(
     from flic_cli.runs.spec import EvaluateRun, Selection
 
     cfg = load_config(config)
-    names = parse_methods(methods, cfg)
+    names = parse_methods(methods, cfg, semantics=semantics != "none")
     seqs, frm = _selection(sequences, frames)
 
     status: list[str] = []

@@ -57,14 +57,13 @@ class Euclidean:
     ----------
     tolerance_m : two points closer than this are linked, metres.
     min_size : smallest cluster kept, points (PCL's ``setMinClusterSize``).
-    max_size : largest cluster kept, points (PCL's ``setMaxClusterSize``); None: no limit.
+    max_size : largest cluster kept, points (PCL's ``setMaxClusterSize``; its default,
+        ``INT_MAX``).
     """
 
     tolerance_m: Annotated[float, Field(gt=0, description="link distance, metres")] = 0.5
     min_size: Annotated[int, Field(ge=1, description="smallest cluster kept, points")] = 100
-    max_size: Annotated[
-        int | None, Field(ge=1, description="largest cluster kept, points (None: no limit)")
-    ] = None
+    max_size: Annotated[int, Field(ge=1, description="largest cluster kept, points")] = 2**31 - 1
     main_param: ClassVar[str] = "tolerance_m"
     sweep_range: ClassVar[tuple[float, float, float]] = (0.1, 1.5, 0.1)
     slow: ClassVar[bool] = False
@@ -75,7 +74,7 @@ class Euclidean:
             image, points, ground, lambda p, _: radius_components(p, self.tolerance_m) + 1,
             self.min_size,
         )  # fmt: skip
-        if self.max_size is not None and labels.size:
+        if labels.size:
             counts = np.bincount(labels)
             too_big = np.flatnonzero(counts > self.max_size)
             too_big = too_big[too_big > 0]
