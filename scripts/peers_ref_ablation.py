@@ -4,8 +4,9 @@ departures one at a time (issue 23).
 Builds variants of the two references OUTSIDE flic, under ``$FLIC_REF/build_ablation/`` (default
 /work/ref): their clones' source, each departure wrapped in a preprocessor switch (the switches
 are written here as textual edits of the clone; nothing of theirs enters flic), compiled once per
-set of switches. Then, on every frame of the shared SemanticKITTI root (``--frames N`` for the
-first N), the adjusted Rand index (ARI) and identity of each cumulative variant against flic at
+set of switches (CVC) or once, the switches read from the environment at each call (SLR).
+Then, on every frame of the shared SemanticKITTI root (``--frames N``: the first N; ``--every K``:
+every K-th), the adjusted Rand index (ARI) and identity of each cumulative variant against flic at
 the reference's parameters, on the same input as scripts/peers_fidelity.py:
 
 CVC (xmba15/curved_voxel_clustering, 0.5 m / 3 deg / 1.3 deg), points without the ground classes;
@@ -37,7 +38,8 @@ SLR (the ICCVW 2021 survey's ScanLineRun_Cluster, 0.5 m / 1.0 m), flic's 64 x 20
 
 Usage::
 
-    python scripts/peers_ref_ablation.py ../shared/data/semantickitti results/peers/fidelity
+    python scripts/peers_ref_ablation.py ../shared/data/semantickitti results/peers/fidelity \
+        --every 5
 """
 
 # ruff: noqa: E501  (the edits below are lines of C++ source)
@@ -107,9 +109,13 @@ CVC_EDITS = (
 )
 
 SLR_EDITS = (
+    (  # the switches, read from the environment at each call (one build for every variant)
+        "#include <pcl/point_types.h>\n",
+        "#include <cstdlib>\n#include <pcl/point_types.h>\nstatic bool fix_(const char* name) { const char* v = std::getenv(name); return v && v[0] == '1'; }\n",
+    ),
     (  # a union-find over labels, next to the label lists
         "        std::vector<std::vector<int>> label_idx_ ;",
-        "        std::vector<std::vector<int>> label_idx_ ;\n        std::vector<int> parent_;\n        auto find_ = [&](int l) { if (!FIX_UNIONFIND) return l; while (parent_[l] != l) l = parent_[l] = parent_[parent_[l]]; return l; };",
+        '        std::vector<std::vector<int>> label_idx_ ;\n        const bool FIX_UNIONFIND = fix_("FIX_UNIONFIND"), FIX_NEAREST = fix_("FIX_NEAREST"), FIX_NOMAKEUP = fix_("FIX_NOMAKEUP"), FIX_EMPTYLINE = fix_("FIX_EMPTYLINE");\n        std::vector<int> parent_;\n        auto find_ = [&](int l) { if (!FIX_UNIONFIND) return l; while (parent_[l] != l) l = parent_[l] = parent_[parent_[l]]; return l; };',
     ),
     (  # new labels of the first line are their own roots
         "                    label_idx_.push_back(runs_idx_[i][j]);\n\n",
@@ -125,7 +131,7 @@ SLR_EDITS = (
     ),
     (  # nearest: the nearest point of the line above instead of the proportional index
         "                    int neighbor_idx = floor( (float) (point_idx_start+k) / runsCurrent_.size() * runsAbove_.size() );\n",
-        "                    int neighbor_idx = floor( (float) (point_idx_start+k) / runsCurrent_.size() * runsAbove_.size() );\n#if FIX_NEAREST\n                    if (runsAbove_.empty()) continue;\n                    { float best = 1e30f; const auto& c = runsCurrent_[point_idx_start+k]; for (std::size_t q = 0; q < runsAbove_.size(); ++q) { const auto& a = runsAbove_[q]; float d = (c.x-a.x)*(c.x-a.x)+(c.y-a.y)*(c.y-a.y)+(c.z-a.z)*(c.z-a.z); if (d < best) { best = d; neighbor_idx = q; } } }\n#endif\n",
+        "                    int neighbor_idx = floor( (float) (point_idx_start+k) / runsCurrent_.size() * runsAbove_.size() );\n                    if (FIX_NEAREST) {\n                    if (runsAbove_.empty()) continue;\n                    float best = 1e30f; const auto& c = runsCurrent_[point_idx_start+k]; for (std::size_t q = 0; q < runsAbove_.size(); ++q) { const auto& a = runsAbove_[q]; float d = (c.x-a.x)*(c.x-a.x)+(c.y-a.y)*(c.y-a.y)+(c.z-a.z)*(c.z-a.z); if (d < best) { best = d; neighbor_idx = q; } }\n                    }\n",
     ),
     (  # labels read from the line above go through the union-find
         "                        int label = neighborPoint.label;\n",
@@ -133,15 +139,15 @@ SLR_EDITS = (
     ),
     (  # nomakeup: skip the brute-force search of lines 1-4 above
         "                if (labelsToMerge.empty())\n                {\n                    // ************** make-up search ************** //",
-        "                if (labelsToMerge.empty())\n                {\n#if !FIX_NOMAKEUP\n                    // ************** make-up search ************** //",
+        "                if (labelsToMerge.empty())\n                {\n                    if (!FIX_NOMAKEUP) {\n                    // ************** make-up search ************** //",
     ),
     (
         "                    if (!labelsToMerge.empty())\n                    {\n                        goto GotLabel;\n                    }\n",
-        "                    if (!labelsToMerge.empty())\n                    {\n                        goto GotLabel;\n                    }\n#endif\n",
+        "                    if (!labelsToMerge.empty())\n                    {\n                        goto GotLabel;\n                    }\n                    }\n",
     ),
     (  # emptyline: an empty row is a line above with no points
         "            if(frame_idx_[i].size() == 0 ){\n                continue;\n            }\n",
-        "            if(frame_idx_[i].size() == 0 ){\n#if FIX_EMPTYLINE\n                if (!label_idx_.empty()) { runsAboveAboveAboveAbove_ = runsAboveAboveAbove_; runsAboveAboveAbove_ = runsAboveAbove_; runsAboveAbove_ = runsAbove_; runsAbove_.clear(); }\n#endif\n                continue;\n            }\n",
+        "            if(frame_idx_[i].size() == 0 ){\n                if (FIX_EMPTYLINE && !label_idx_.empty()) { runsAboveAboveAboveAbove_ = runsAboveAboveAbove_; runsAboveAboveAbove_ = runsAboveAbove_; runsAboveAbove_ = runsAbove_; runsAbove_.clear(); }\n                continue;\n            }\n",
     ),
 )
 
@@ -175,21 +181,27 @@ def build() -> None:
                             "-lpcl_common"], check=True)  # fmt: skip
     pyinc = sysconfig.get_paths()["include"]
     ext = sysconfig.get_config_var("EXT_SUFFIX")
-    for k in range(len(SLR_STEPS)):
-        out = BUILD / f"slr_{k}{ext}"
-        if not out.exists():
-            # the module keeps its name; each variant is loaded from its own file
-            subprocess.run(["g++", "-O3", "-std=c++14", "-shared", "-fPIC", *flags(SLR_STEPS, k),
-                            *PCL, f"-I{pyinc}", str(slr), "-o", str(out), "-lpcl_common"],
-                           check=True)  # fmt: skip
+    out = BUILD / f"ScanLineRun_Cluster{ext}"
+    if not out.exists():
+        subprocess.run(["g++", "-O3", "-std=c++14", "-shared", "-fPIC", *PCL, f"-I{pyinc}",
+                        str(slr), "-o", str(out), "-lpcl_common"], check=True)  # fmt: skip
 
 
-def load_slr(k: int):  # noqa: ANN201
+def load_slr():  # noqa: ANN201
     ext = sysconfig.get_config_var("EXT_SUFFIX")
-    spec = importlib.util.spec_from_file_location("ScanLineRun_Cluster", BUILD / f"slr_{k}{ext}")
+    spec = importlib.util.spec_from_file_location(
+        "ScanLineRun_Cluster", BUILD / f"ScanLineRun_Cluster{ext}"
+    )
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
     return module.ScanLineRun_Cluster(0.5, 1.0)
+
+
+def slr_switches(upto: int) -> None:
+    """Set the environment switches the SLR build reads (steps 1..upto on)."""
+    for k, step in enumerate(SLR_STEPS):
+        if k:
+            os.environ[f"FIX_{step.upper()}"] = "1" if k <= upto else "0"
 
 
 def singletons(labels: np.ndarray) -> np.ndarray:
@@ -210,14 +222,15 @@ def main() -> None:
     ap.add_argument("data", type=Path)
     ap.add_argument("out", type=Path)
     ap.add_argument("--frames", type=int, default=0, help="only the first N frames (0: all)")
+    ap.add_argument("--every", type=int, default=1, help="every K-th frame of those")
     args = ap.parse_args()
     build()
     projection = load_config(None).projection
-    slrs = [load_slr(k) for k in range(len(SLR_STEPS))]
+    slr_ref = load_slr()
     tmp = Path(tempfile.mkdtemp())
     rows = []
     refs = open_dataset(args.data).refs()
-    for ref in refs[: args.frames or None]:
+    for ref in refs[: args.frames or None : args.every]:
         scan = np.fromfile(ref.path, dtype=np.float32).reshape(-1, 4)
         labels = np.fromfile(ref.label_path, dtype=np.uint32)
         keep = ~ground_mask(labels)
@@ -243,7 +256,8 @@ def main() -> None:
                 np.ascontiguousarray(xyz[..., 2]), np.ascontiguousarray(valid), h, w)  # fmt: skip
         mine = slr_pixels(image, valid, 0.5, 1.0).reshape(h, w)[valid]
         for k, step in enumerate(SLR_STEPS):
-            theirs = np.asarray(slrs[k].ScanLineRun_cluster(*call))[:h, :w][valid]
+            slr_switches(k)
+            theirs = np.asarray(slr_ref.ScanLineRun_cluster(*call))[:h, :w][valid]
             rows.append({"method": "slr", "step": k, "variant": step, "sequence": ref.sequence,
                          "frame": ref.frame, "ari": adjusted_rand_score(theirs, mine),
                          "identical": same_partition(theirs, mine),
