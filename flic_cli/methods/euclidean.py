@@ -5,10 +5,10 @@ Everyday Manipulation in Human Living Environments", PhD thesis, 2009, section 4
 PCL grows each cluster by radius searches from a seed; the result is exactly the connected
 components of the radius graph (pairs strictly closer than the tolerance: FLANN's radius search,
 which PCL's ``KdTreeFLANN`` calls, keeps ``dist < radius``; checked with PCL 1.13 on points exactly
-0.5 m apart), and clusters outside ``[min_size, max_size]`` points are
-dropped. The tolerance defaults to the 0.5 m of the ICCVW 2021 survey of traditional
-clusterers (Zhao, Zhang, Patel: "Towards Fast LiDAR Panoptic Segmentation without Training",
-ICCVW 2021).
+0.5 m apart), and clusters outside ``[min_size, max_size]`` points are dropped. The tolerance
+defaults to the 0.5 m of the ICCVW 2021 survey of traditional clusterers (Zhao, Zhang, Patel:
+"Towards Fast LiDAR Panoptic Segmentation without Training", ICCVW 2021); the sweeps of
+results/peers/sweeps/ confirm it.
 
 The components are found without listing the graph's pairs (a dense LiDAR frame has tens of
 millions of them), on a grid of cubic cells of side ``tolerance / sqrt(3)``, the grid method of
@@ -18,11 +18,11 @@ every point a core point:
 1. two points of one cell are closer than the cell's diagonal, the tolerance: a cell's points
    are one component;
 2. two points of cells whose index differs by 3 or more along an axis are more than
-   ``2 * tolerance / sqrt(3) > tolerance`` apart: only the 62 pairs of cell offsets in
-   ``{-2..2}^3`` (one of each +-pair) can link;
-3. a candidate pair of cells is linked when any of its point pairs is within the tolerance; it is
-   tested only when the two cells are not yet in one component (a union-find over cells), the
-   closest offsets first, and the test stops at the first linking pair.
+   ``2 * tolerance / sqrt(3) > tolerance`` apart: only cells at the 124 offsets in ``{-2..2}^3``
+   can link (62, one of each +- pair, are tested);
+3. a candidate pair of cells is linked when any of its point pairs is closer than the
+   tolerance; it is tested only when the two cells are not yet in one component (a union-find
+   over cells), the closest offsets first, and the test stops at the first linking pair.
 
 In a dense region most candidate pairs are decided by their first point pairs or skipped as
 already joined, so the cost follows the number of points and cells, not of pairs; memory is
