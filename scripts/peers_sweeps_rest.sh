@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # The sweeps of issue 23 that earlier runs could not finish (results/peers/sweeps/README.md):
 # Euclidean (fast since the grid method) and the k = 32 ALPINEs on every shared frame and every
-# sample frame, HDBSCAN (about 80 s per frame and value) on a subset: the first frame of
-# sequences 00 and 08 of the shared frames and the first two sample frames, four values.
+# sample frame, HDBSCAN (15-60 s per frame and value here) on a subset: the first frame of each
+# shared sequence (5 frames, 24 objects) and the first two sample frames, four values.
 # No-ground setting. Outputs in results/peers/sweeps/<method>/{kitti,sample0}/.
 # Usage: scripts/peers_sweeps_rest.sh ../shared/data/semantickitti S0/semantickitti [JOBS]
 # (S0: `flic sample S0 --frames 20 --seed 0`)
@@ -27,5 +27,5 @@ for name in kitti sample0; do
   # width_scale x each class's box width
   run alpine-k32 "$name" "$data" --from 0.6 --to 1.6 --step 0.2
 done
-run hdbscan kitti "$kitti" --sequences 00,08 --frames 0:1 --from 10 --to 70 --step 20
+run hdbscan kitti "$kitti" --frames 0:1 --from 10 --to 70 --step 20
 run hdbscan sample0 "$sample" --frames 0:2 --from 10 --to 70 --step 20
