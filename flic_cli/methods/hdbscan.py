@@ -2,7 +2,7 @@
 :class:`sklearn.cluster.HDBSCAN`: the density-based hierarchy of DBSCAN over every radius,
 its clusters chosen by stability, so no single radius is set. ``min_cluster_size`` 30 from the
 sweep of results/peers/sweeps/hdbscan/ (5 shared frames: 87.48 against 90.45 at 70; 2 sample
-frames: 65.98, their best; the smallest loss on either of the values swept, 10-70).
+frames: 65.98, their best; the smallest loss on either of 10, 20, 30, 50 and 70).
 
 It takes seconds per SemanticKITTI frame on one core (``slow``: ``flic benchmark`` times it on
 every n-th frame only, as DBSCAN).
