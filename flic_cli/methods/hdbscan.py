@@ -4,7 +4,7 @@ its clusters chosen by stability, so no single radius is set. ``min_cluster_size
 sweep of results/peers/sweeps/hdbscan/ (5 shared frames: 87.48 against 90.45 at 70; 2 sample
 frames: 65.98, their best; the smallest loss on either of 10, 20, 30, 50 and 70).
 
-It takes seconds per SemanticKITTI frame on one core (``slow``: ``flic benchmark`` times it on
+It takes 15-60 s per SemanticKITTI frame on one core (``slow``: ``flic benchmark`` times it on
 every n-th frame only, as DBSCAN).
 """
 
