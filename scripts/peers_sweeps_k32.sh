@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SUPERSEDED by scripts/peers_sweeps_rest.sh (every frame); kept until make_results.sh calls that.
 # ALPINE with k = 32 (presets alpine-k32 and alpine-agnostic), swept like scripts/peers_sweeps.sh
 # (whose alpine-agnostic runs used k = 8 and are kept in results/peers/sweeps/alpine-agnostic-k8/).
 # Usage: scripts/peers_sweeps_k32.sh ../shared/data/semantickitti S0/semantickitti

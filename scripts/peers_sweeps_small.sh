@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SUPERSEDED by scripts/peers_sweeps_rest.sh (every frame); kept until make_results.sh calls that.
 # The sweeps that scripts/peers_sweeps.sh and peers_sweeps_k32.sh could not finish on the shared
 # machine this session (Euclidean ran at minutes per frame there, ALPINE k = 32 at 90 s per frame
 # over 13 values), cut down: 5 shared frames (the first of each sequence) and 5 sample frames,

@@ -10,7 +10,7 @@ from flic_cli.errors import FlicInputError
 from flic_cli.ground.base import Ground
 from flic_cli.methods.alpine import Alpine, box_extent, split_cluster
 from flic_cli.methods.cvc import Cvc, curved_voxels, voxel_components
-from flic_cli.methods.euclidean import Euclidean, radius_components
+from flic_cli.methods.euclidean import CELL_SHRINK, Euclidean, radius_components
 from flic_cli.methods.hdbscan import Hdbscan
 from flic_cli.methods.slr import Slr, slr_pixels
 from flic_cli.range_image import RangeImage
@@ -28,18 +28,46 @@ def sensor_image(points: np.ndarray) -> RangeImage:
 # ---- Euclidean -----------------------------------------------------------------------------
 
 
-@pytest.mark.parametrize("seed", range(6))
-@pytest.mark.parametrize("budget", [1 << 23, 7])
-def test_euclidean_is_the_radius_graph(seed: int, budget: int) -> None:
-    rng = np.random.default_rng(seed)
-    pts = rng.uniform(0, 4, size=(120, 3))
-    pts[100:] = pts[:20]  # coinciding points
-    r = 0.6
+def brute_radius(pts: np.ndarray, r: float) -> np.ndarray:
+    """Components of the graph of every pair strictly closer than ``r`` (all pairs computed)."""
     d = np.linalg.norm(pts[:, None] - pts[None], axis=2)
-    i, j = np.nonzero(d <= r)
-    expect = graph_components(len(pts), list(zip(i.tolist(), j.tolist(), strict=True)))
-    got = radius_components(pts, r, pair_budget=budget)
-    assert same_partition(got, expect)
+    i, j = np.nonzero(d < r)
+    return graph_components(len(pts), list(zip(i.tolist(), j.tolist(), strict=True)))
+
+
+@pytest.mark.parametrize("seed", range(6))
+@pytest.mark.parametrize("r", [0.15, 0.6, 1.7])
+def test_euclidean_is_the_radius_graph(seed: int, r: float) -> None:
+    rng = np.random.default_rng(seed)
+    pts = rng.uniform(0, 4, size=(160, 3))
+    pts[100:120] = pts[:20]  # coinciding points
+    pts[120:] = rng.normal(2.0, 0.03, size=(40, 3))  # a dense blob: many pairs per cell
+    assert same_partition(radius_components(pts, r), brute_radius(pts, r))
+
+
+def test_euclidean_links_only_pairs_closer_than_the_tolerance() -> None:
+    # a lattice of spacing exactly 0.5 m (exact in binary): PCL does not link pairs at exactly
+    # the tolerance (FLANN keeps dist < radius); the diagonals are 0.71 m
+    g = np.arange(4) * 0.5
+    pts = np.stack(np.meshgrid(g, g, g), axis=-1).reshape(-1, 3)
+    assert np.unique(radius_components(pts, 0.5)).size == pts.shape[0]
+    assert np.unique(radius_components(pts, 0.5 + 1e-9)).size == 1
+    # pairs just under the tolerance in random directions: their cells are up to 2 apart per axis
+    rng = np.random.default_rng(0)
+    u = rng.normal(size=(300, 3))
+    u /= np.linalg.norm(u, axis=1, keepdims=True)
+    p = rng.uniform(0, 1, size=(300, 3)) + 10.0 * np.arange(300)[:, None]
+    pts = np.vstack([p, p + 0.5 * (1 - 1e-6) * u])
+    assert same_partition(radius_components(pts, 0.5), np.tile(np.arange(300), 2))
+    # the farthest candidate cell offset, (2, 2, 2): p just under its cell's far corner
+    # (the grid starts at the smallest coordinate, 0 here), q in the cell two further on
+    side = 0.5 / np.sqrt(3) * (1 - CELL_SHRINK)
+    p = np.full(3, side * (1 - 1e-11))
+    q = p + 0.5 * (1 - 1e-12) / np.sqrt(3)
+    assert (np.floor(q / side) - np.floor(p / side) == 2).all()
+    pts = np.vstack([np.zeros(3), p, q])
+    assert same_partition(radius_components(pts, 0.5), brute_radius(pts, 0.5))
+    assert np.unique(radius_components(pts, 0.5)[1:]).size == 1
 
 
 def test_euclidean_method_drops_small_and_ground() -> None:
@@ -54,6 +82,8 @@ def test_euclidean_method_drops_small_and_ground() -> None:
     mask[0, :25] = True  # leaves 5 blob points: under the minimum
     labels = Euclidean(tolerance_m=0.5, min_size=5).segment(img, pts, Ground.from_mask(img, mask))
     assert (labels[:25] == 0).all() and (labels[25:30] == 1).all() and (labels[30:] == 2).all()
+    labels = Euclidean(tolerance_m=0.5, min_size=5, max_size=29).segment(img, pts, None)
+    assert (labels[:30] == 0).all() and (labels[30:] == 1).all()  # PCL's setMaxClusterSize
 
 
 # ---- CVC -----------------------------------------------------------------------------------
@@ -306,3 +336,25 @@ def test_segment_needs_semantics_for_alpine(sample_root, tmp_path) -> None:  # n
     assert bad.exit_code == 2 and "--semantics" in bad.output
     good = runner.invoke(app, [*base, "--semantics", "oracle", "--out", str(tmp_path / "b")])
     assert good.exit_code == 0, good.output
+
+
+def test_default_methods_with_semantics_add_the_per_class_ones(tmp_path) -> None:  # noqa: ANN001
+    """Without --methods, `evaluate --semantics oracle` runs `default_methods` and then
+    `default_semantic_methods`; a config naming an unknown variant there is refused."""
+    from flic_cli.config import load_config
+    from flic_cli.runs.pipeline import parse_methods
+
+    cfg = load_config(None)
+    plain = parse_methods(None, cfg)
+    with_sem = parse_methods(None, cfg, semantics=True)
+    assert plain == list(cfg.default_methods) and "alpine" not in plain
+    assert with_sem == plain + [m for m in cfg.default_semantic_methods if m not in plain]
+    assert {"alpine", "alpine-k32"} <= set(with_sem)
+    assert parse_methods("slr", cfg, semantics=True) == ["slr"]  # --methods wins
+    own = tmp_path / "own.toml"
+    own.write_text('default_semantic_methods = ["slr", "flic0-scipy"]\n')
+    assert parse_methods(None, load_config(own), semantics=True) == [*plain, "flic0-scipy"]
+    bad = tmp_path / "bad.toml"
+    bad.write_text('default_semantic_methods = ["nothing"]\n')
+    with pytest.raises(FlicInputError, match="default_semantic_methods"):
+        load_config(bad)

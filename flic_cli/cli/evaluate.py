@@ -129,7 +129,7 @@ def evaluate(
     from flic_cli.runs.spec import EvaluateRun
 
     cfg = load_config(config)
-    names = parse_methods(methods, cfg)
+    names = parse_methods(methods, cfg, semantics=semantics != "none")
 
     status: list[str] = []
 

@@ -29,7 +29,7 @@ else:  # pragma: no cover
 SECTIONS = ("projection", "ground", "methods")
 
 #: The top-level keys a config file may have besides its tables.
-TOP_KEYS = ("default_methods",)
+TOP_KEYS = ("default_methods", "default_semantic_methods")
 
 #: Keys of a ``[methods.NAME]`` table besides the component's parameters.
 METHOD_KEYS = ("kind", "ground", "like")
@@ -151,7 +151,17 @@ def parse_config(raw: dict[str, Any], files: tuple[Path, ...] = ()) -> Config:
     missing = [m for m in default_methods if m not in methods]
     if missing or not default_methods:
         raise fail(f"default_methods: no method variant {', '.join(missing) or '(empty list)'}")
-    return Config(projection, ground, methods, tuple(default_methods), files)
+    semantic_methods = raw.get("default_semantic_methods", [])
+    if not isinstance(semantic_methods, list) or not all(
+        isinstance(m, str) for m in semantic_methods
+    ):
+        raise fail("default_semantic_methods must be a list of method variant names")
+    missing = [m for m in semantic_methods if m not in methods]
+    if missing:
+        raise fail(f"default_semantic_methods: no method variant {', '.join(missing)}")
+    return Config(
+        projection, ground, methods, tuple(default_methods), files, tuple(semantic_methods)
+    )
 
 
 def _resolve_like(

@@ -60,6 +60,8 @@ class Config:
     methods : the method variants by name, in the order the files define them.
     default_methods : the variants ``flic evaluate`` and ``flic benchmark`` run by default.
     files : the config files it was read from (the shipped defaults first).
+    default_semantic_methods : the variants ``flic evaluate --semantics oracle`` runs by default
+        besides ``default_methods`` (those that cluster per class).
     """
 
     projection: Projection
@@ -67,6 +69,7 @@ class Config:
     methods: dict[str, MethodSpec]
     default_methods: tuple[str, ...]
     files: tuple[Path, ...] = field(default=())
+    default_semantic_methods: tuple[str, ...] = field(default=())
 
     def method(self, name: str) -> MethodSpec:
         """The variant ``name``; a one-line error naming the known variants otherwise."""
@@ -94,6 +97,7 @@ class Config:
         names = list(self.methods) if methods is None else methods
         return {
             "default_methods": list(self.default_methods),
+            "default_semantic_methods": list(self.default_semantic_methods),
             "projection": _fields(self.projection),
             "ground": {name: _fields(r) for name, r in self.ground.items()},
             "methods": {name: self.methods[name].as_table() for name in names},

@@ -108,9 +108,8 @@ def continuous_clustering_ground_truth(points: np.ndarray, labels: np.ndarray) -
     :data:`CC_DISTANCE_M` radius graph, components under :data:`CC_MIN_POINTS` points 0, and
     points of the ground classes and of "unlabeled" (class 0) 0.
 
-    PCL's ``ConditionalEuclideanClustering`` there links pairs strictly closer than 1.0 m; the
-    radius graph here links pairs at most 1.0 m apart (they differ only on pairs at exactly
-    1.0 m).
+    PCL's ``ConditionalEuclideanClustering`` there links pairs strictly closer than 1.0 m, as
+    :func:`flic_cli.methods.euclidean.radius_components` does.
 
     Parameters
     ----------

@@ -320,10 +320,12 @@ def resolve_method(method: str, mc: int | None) -> str:
     return "flic0" if method == "flic" else method
 
 
-def parse_methods(text: str | None, config: Config) -> list[str]:
-    """Comma-separated method variant names, checked against the config (None: its defaults)."""
+def parse_methods(text: str | None, config: Config, semantics: bool = False) -> list[str]:
+    """Comma-separated method variant names, checked against the config (None: its defaults,
+    and with ``semantics`` its ``default_semantic_methods`` after them)."""
     if text is None:
-        return list(config.default_methods)
+        names = [*config.default_methods, *(config.default_semantic_methods if semantics else ())]
+        return list(dict.fromkeys(names))
     names = list(dict.fromkeys(t.strip() for t in text.split(",") if t.strip()))
     if not names:
         raise FlicInputError(None, f"--methods is empty (known: {', '.join(config.methods)})")

@@ -1,6 +1,8 @@
 // Runs xmba15/curved_voxel_clustering (built outside flic, /work/ref/) on float32 xyz files and
 // writes one int32 label per point (-1: the reference's unclustered points) and the time.
-// Build: see scripts/peers_fidelity.sh. Usage: cvc_driver IN.xyz OUT.labels
+// Build: see scripts/peers_fidelity.sh. Usage: cvc_driver IN.xyz OUT.labels [NUM_MIN_POINTS]
+// (NUM_MIN_POINTS: the library's numMinPoints, default its own, 3; scripts/peers_ref_ablation.py)
+#include <cstdlib>
 #include <chrono>
 #include <cstdio>
 #include <fstream>
@@ -10,8 +12,8 @@
 
 int main(int argc, char** argv)
 {
-    if (argc != 3) {
-        std::fprintf(stderr, "usage: %s IN.xyz OUT.labels\n", argv[0]);
+    if (argc != 3 && argc != 4) {
+        std::fprintf(stderr, "usage: %s IN.xyz OUT.labels [NUM_MIN_POINTS]\n", argv[0]);
         return 2;
     }
     std::ifstream in(argv[1], std::ios::binary | std::ios::ate);
@@ -27,6 +29,7 @@ int main(int argc, char** argv)
         (*cloud)[i].z = xyz[3 * i + 2];
     }
     perception::CurvedVoxelClustering<pcl::PointXYZ>::Param param;  // the library's defaults
+    if (argc == 4) param.numMinPoints = std::atoi(argv[3]);
     perception::CurvedVoxelClustering<pcl::PointXYZ> cvc(param);
     auto t0 = std::chrono::steady_clock::now();
     auto clusters = cvc.run(cloud);
