@@ -57,6 +57,30 @@ within ``threshold_m`` (the walk's free-space rule, carried from the pixel walke
 column). This splits such people at any range where something is seen behind them, but on the
 50 shared KITTI frames far, sparse cars show such columns too and the rule costs 2.6 points of
 IoU_mu there (results/bridge-cases/), so it is not the default.
+
+Level surfaces (``level_dz_m`` > 0; 0 = off, the default)
+---------------------------------------------------------
+On a horizontal surface at height ``z`` (sensor frame) the beams of rows ``r`` and ``r - k`` hit
+``|z| |cot(e_{r-k}) - cot(e_r)|`` apart (about ``d^2 de / |z|``: 0.5 m at 8 m, 2 m at 16 m for a
+hood 0.7 m below the sensor), at the same height: a car's top or hood falls apart row by row
+under any fixed link distance, and the car splits where the scan passes from its rear face onto
+its top. With ``level_dz_m`` the *up* walk (only it) also links p to the node ``q_k`` when
+
+    |z_q - z_p| < level_dz_m   and
+    |p - q_k| < min(level_cap_m, level_margin |z_p| |cot(e_{r-k}) - cot(e_r)|)
+
+(``z = d sin(e)``; no level link where the two rows' elevations differ in sign or one is 0: a
+level surface is then not hit by both beams). The walk's other rules stay: it stops on free space
+(a farther node not linked, a farther range outside the mask), and its bound uses
+``max(t_p, level_cap_m)``. Why this does not join p to something farther at the same height: a
+level link needs a return at p's height exactly where the beam above p would meet the level
+surface through p (to within ``level_dz_m`` in height, so within ``level_dz_m / |tan e|`` in
+range); a wall or a second car farther behind is hit by that beam on its face, lower by
+``(gap) |tan e|`` than p, or not at all (the beam passes over it), and the beams between p and q
+(walks over ``k > 1`` rows) show no return or a nearer one (a farther one stops the walk). What
+the scan cannot tell from a level surface -- a second object whose top edge lies at p's height
+within the footprint spacing -- it joins. The ground is removed before clustering (by label or by
+the ground remover), so no level links arise inside it.
 """
 
 from __future__ import annotations
@@ -161,6 +185,7 @@ def _walk_row(
     fixed_side_gaps: bool,
     above: np.ndarray,
     below: np.ndarray,
+    level: LevelRule,
 ) -> None:
     """The walks of row ``r`` past their first steps (module docstring); every link found merges
     two labels.
@@ -175,8 +200,10 @@ def _walk_row(
     (left, up-left, up-right) has passed an open gap; with ``fixed_side_gaps`` such a walk links
     only within ``threshold`` (module docstring, "Gaps beside"); ``above``, ``below``: the
     ranges of the first node above and below every pixel (:func:`_column_neighbours`).
+    ``level``: the level-surface rule of the up walk (:func:`level_tables`, module docstring).
     """
     one = np.uint64(1)
+    level_on, sin_e, spacing, level_dz, level_margin, level_cap = level
     row = r * w
     k_diag = min(k_up, k_row)
     for di in range(4):
@@ -186,6 +213,7 @@ def _walk_row(
         if kmax < 2:
             continue
         side = fixed_side_gaps & (di != 1)
+        lv_walk = level_on & (di == 1)
         row_1 = (r + dr) * w
         m = 0
         for k in range(on_w.shape[1]):
@@ -212,6 +240,9 @@ def _walk_row(
             cos_k = cos_t[di, r, step]
             sin_k = sin_t[di, r, step]
             row_q = (r + step * dr) * w
+            se_p = sin_e[r]
+            se_q = sin_e[r + step * dr]
+            sp_k = spacing[r, step] if lv_walk else 0.0
             going = 0
             for t in range(m):
                 c = walks[t]
@@ -227,8 +258,13 @@ def _walk_row(
                 dq = np.float64(nodes[q])
                 # the bound (nothing from here on can be linked), a link, free space beside p (a
                 # farther node, or a range beyond p outside the mask)
-                bound = d * sin_k >= tp  # (tp never grows along a walk)
+                # (tp never grows along a walk; a level link is never longer than level_cap)
+                bound = d * sin_k >= (max(tp, level_cap) if lv_walk else tp)
                 linked = (dq > 0.0) & distance_edge(d, dq, cos_k, tp2)
+                if lv_walk:
+                    linked |= (dq > 0.0) & _level_edge(
+                        d, dq, se_p, se_q, cos_k, sp_k, level_dz, level_margin, level_cap
+                    )
                 free = (dq > d) | ((dq <= 0.0) & (raw[q] > d))
                 link_c[n_links] = c
                 link_q[n_links] = q
@@ -241,6 +277,58 @@ def _walk_row(
             m = going
         for t in range(n_links):
             union(parent, labels[row + link_c[t]], labels[link_q[t]])
+
+
+#: The level-surface rule as the kernel takes it: (on, sin of the row elevations (H,), the
+#: footprint spacing table of :func:`level_tables` (H, reach + 1), height tolerance (m),
+#: margin, cap (m)).
+LevelRule = tuple[bool, np.ndarray, np.ndarray, float, float, float]
+
+
+@njit(cache=True)
+def level_tables(elevation: np.ndarray, reach: int) -> np.ndarray:
+    """Footprint spacing per metre of height between the beams of rows ``r`` and ``r - k``.
+
+    A level surface at height ``z`` (sensor frame, ``z`` of the same sign as both rows'
+    elevations) is hit by the beam of elevation ``e`` at the horizontal range ``z / tan(e)``, so
+    the hits of rows ``r`` and ``r - k`` lie ``|z| |cot(e_{r-k}) - cot(e_r)|`` apart.
+
+    Returns
+    -------
+    (H, reach + 1) float64, ``|cot(e_{r-k}) - cot(e_r)|``; 0 where a level surface cannot be hit
+    by both beams (elevations of different signs or 0, or ``r - k < 0``: no level link there).
+    """
+    h = elevation.size
+    out = np.zeros((h, reach + 1))
+    for r in range(h):
+        for k in range(1, min(reach, r) + 1):
+            a = elevation[r]
+            b = elevation[r - k]
+            if a * b > 0.0:
+                out[r, k] = abs(1.0 / np.tan(b) - 1.0 / np.tan(a))
+    return out
+
+
+@njit(cache=True, inline="always")
+def _level_edge(
+    d: float,
+    dq: float,
+    se_p: float,
+    se_q: float,
+    cos_k: float,
+    spacing: float,
+    dz: float,
+    margin: float,
+    cap: float,
+) -> bool:
+    """The level-surface link of the up walk (module docstring, "Level surfaces"): the nodes
+    at ranges ``d`` (p) and ``dq`` (q, ``k`` rows above, same column) lie at heights within
+    ``dz`` of each other, and closer than ``min(cap, margin |z_p| spacing)``, the footprint
+    spacing a level surface at p's height would show between their beams."""
+    zp = d * se_p
+    zq = dq * se_q
+    lim = min(cap, margin * abs(zp) * spacing)
+    return (abs(zq - zp) < dz) & distance_edge(d, dq, cos_k, lim * lim)
 
 
 @njit(cache=True, inline="always")
@@ -334,6 +422,40 @@ def _first_steps(
 
 
 @njit(cache=True)
+def _first_steps_level(
+    link: np.ndarray,
+    on: np.ndarray,
+    d: np.ndarray,
+    dq: np.ndarray,
+    rq: np.ndarray,
+    threshold: float,
+    sin_gamma: float,
+    cos_1: float,
+    sin_1: float,
+    further: bool,
+    se_p: float,
+    se_q: float,
+    spacing: float,
+    dz: float,
+    margin: float,
+    cap: float,
+) -> None:
+    """:func:`_first_steps` of the up walk with the level-surface rule: a link also where
+    :func:`_level_edge` holds; the walk's bound reaches ``max(t_p, cap)``."""
+    for c in range(d.size):
+        dd = np.float64(d[c])
+        q = np.float64(dq[c])
+        t = dd * sin_gamma
+        tp = threshold if threshold >= t else t
+        ok = (dd > 0.0) & (dd * sin_1 < max(tp, cap))
+        linked = ok & (q > 0.0) & distance_edge(dd, q, cos_1, tp * tp)
+        linked |= ok & (q > 0.0) & _level_edge(dd, q, se_p, se_q, cos_1, spacing, dz, margin, cap)
+        free = ((q > 0.0) & (q > dd)) | ((q <= 0.0) & (rq[c] > dd))
+        link[c] = linked
+        on[c] = ok & ~linked & ~free & further
+
+
+@njit(cache=True)
 def _bridge_components(
     ranges: np.ndarray,
     skip: np.ndarray,
@@ -348,6 +470,7 @@ def _bridge_components(
     use_weights: bool,
     attached: np.ndarray,
     fixed_side_gaps: bool,
+    level: LevelRule,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Provisional label of every pixel (0 = no node) and the final label of each provisional
     label (0 = dropped): the connected components of the Bridge graph (module docstring); the
@@ -423,10 +546,17 @@ def _bridge_components(
         if k_up >= 1:
             above = nodes[row - w : row]
             raw_above = rf[row - w : row]
-            _first_steps(
-                up[:w], up_on[:w], d, above, raw_above, threshold, sin_gamma, cos_t[1, r, 1],
-                sin_t[1, r, 1], k_up >= 2,
-            )  # fmt: skip
+            if level[0]:
+                _first_steps_level(
+                    up[:w], up_on[:w], d, above, raw_above, threshold, sin_gamma,
+                    cos_t[1, r, 1], sin_t[1, r, 1], k_up >= 2, level[1][r], level[1][r - 1],
+                    level[2][r, 1], level[3], level[4], level[5],
+                )  # fmt: skip
+            else:
+                _first_steps(
+                    up[:w], up_on[:w], d, above, raw_above, threshold, sin_gamma,
+                    cos_t[1, r, 1], sin_t[1, r, 1], k_up >= 2,
+                )  # fmt: skip
         if k_diag >= 1:  # (w > 1) the diagonal neighbours, across the seam at both ends
             c1, s1, on = cos_t[2, r, 1], sin_t[2, r, 1], k_diag >= 2
             _first_steps(
@@ -489,7 +619,7 @@ def _bridge_components(
         pack(up_on[: 64 * nw], on_w[1])
         _walk_row(
             r, w, on_w, nodes, rf, labels, parent, cos_t, sin_t, threshold, sin_gamma, k_row,
-            k_up, walks, link_c, link_q, holed, fixed_side_gaps, col_above, col_below,
+            k_up, walks, link_c, link_q, holed, fixed_side_gaps, col_above, col_below, level,
         )  # fmt: skip
     attach(labels, size, attached)
     return labels[:n], number(parent, size, np.int64(n_labels), min_size)
@@ -509,6 +639,20 @@ def cached_walk_tables(
         if len(_TABLES) >= 64:
             _TABLES.clear()
         out = _TABLES[key] = walk_tables(elevation, width, reach)
+    return out
+
+
+_LEVEL: dict[tuple, np.ndarray] = {}
+
+
+def cached_level_tables(elevation: np.ndarray, reach: int) -> np.ndarray:
+    """:func:`level_tables`, computed once per elevation and reach."""
+    key = (elevation.tobytes(), reach)
+    out = _LEVEL.get(key)
+    if out is None:
+        if len(_LEVEL) >= 64:
+            _LEVEL.clear()
+        out = _LEVEL[key] = level_tables(elevation.astype(np.float64), reach)
     return out
 
 
@@ -539,20 +683,32 @@ def run_bridge(
     point_pixel: np.ndarray | None = None,
     attached: np.ndarray | None = None,
     fixed_side_gaps: bool = False,
+    level_dz_m: float = 0.0,
+    level_margin: float = 1.5,
+    level_cap_m: float = 2.0,
 ) -> np.ndarray:
     """Bridge labels per pixel, or per point given ``point_pixel`` (see :func:`bridge_labels`;
     ``skip``: pixels left out even with a range, e.g. ground; ``attached``: held pixels, see
-    :func:`flic_cli.methods.connections.components`)."""
+    :func:`flic_cli.methods.connections.components`; ``level_dz_m`` > 0 turns the level-surface
+    rule on)."""
     if reach_px < 1:
         raise ValueError(f"reach_px must be >= 1, got {reach_px}")
     ranges, elevation, skip, use_skip, weights, use_weights = kernel_inputs(
         ranges, elevation, skip, weights
     )
     cos_t, sin_t = cached_walk_tables(elevation, ranges.shape[1], int(reach_px))
+    level_on = level_dz_m > 0
+    spacing = (
+        cached_level_tables(elevation, int(reach_px)) if level_on else np.zeros((1, 1))
+    )
+    level = (
+        bool(level_on), np.sin(elevation.astype(np.float64)), spacing, float(level_dz_m),
+        float(level_margin), float(level_cap_m),
+    )  # fmt: skip
     args = (
         ranges, skip, use_skip, cos_t, sin_t, float(threshold_m),
         float(np.sin(np.radians(gamma_deg))), int(reach_px), int(min_size), weights, use_weights,
-        attached_input(attached), bool(fixed_side_gaps),
+        attached_input(attached), bool(fixed_side_gaps), level,
     )  # fmt: skip
     if point_pixel is None:
         return bridge_pixels(*args)
@@ -571,6 +727,11 @@ class Bridge:
     min_size : smallest cluster kept, points of the evaluated set (a pixel counts its points).
     fixed_side_gaps : a walk with a sideways step that has passed an open gap links only within
         ``threshold_m`` (module docstring, "Gaps beside"); off by default.
+    level_dz_m : height tolerance of the level-surface link of the up walk, metres; 0 = off
+        (module docstring, "Level surfaces").
+    level_margin : the level link reaches this many times the footprint spacing of a level
+        surface at p's height between the two beams.
+    level_cap_m : the level link's longest reach, metres.
     """
 
     threshold_m: Annotated[float, Field(gt=0, description="link distance near, metres")] = 0.35
@@ -582,6 +743,15 @@ class Bridge:
     fixed_side_gaps: Annotated[
         bool, Field(description="sideways walks over open gaps link within threshold_m only")
     ] = False
+    level_dz_m: Annotated[
+        float, Field(ge=0, lt=1, description="level link height tolerance, metres (0 = off)")
+    ] = 0.0
+    level_margin: Annotated[
+        float, Field(gt=0, le=10, description="level link: times the footprint spacing")
+    ] = 1.5
+    level_cap_m: Annotated[
+        float, Field(gt=0, le=20, description="level link: longest reach, metres")
+    ] = 2.0
     main_param: ClassVar[str] = "threshold_m"
     sweep_range: ClassVar[tuple[float, float, float]] = (0.2, 1.0, 0.05)
     sweep_label: ClassVar[str] = "distance threshold [m]"
@@ -601,6 +771,9 @@ class Bridge:
             image.point_pixel,
             attached,
             self.fixed_side_gaps,
+            self.level_dz_m,
+            self.level_margin,
+            self.level_cap_m,
         )
 
 
@@ -614,6 +787,9 @@ def bridge_labels(
     mask: np.ndarray | None = None,
     weights: np.ndarray | None = None,
     fixed_side_gaps: bool = Bridge.fixed_side_gaps,
+    level_dz_m: float = Bridge.level_dz_m,
+    level_margin: float = Bridge.level_margin,
+    level_cap_m: float = Bridge.level_cap_m,
 ) -> np.ndarray:
     """Bridge cluster labels of a range image (the graph is defined in the module docstring).
 
@@ -630,6 +806,8 @@ def bridge_labels(
     weights : (H, W) int, points per pixel (default 1 per pixel).
     fixed_side_gaps : sideways walks over open gaps link within ``threshold_m`` only (module
         docstring, "Gaps beside").
+    level_dz_m, level_margin, level_cap_m : the level-surface link of the up walk (module
+        docstring, "Level surfaces"; ``level_dz_m`` 0 = off), metres, -, metres.
 
     Returns
     -------
@@ -638,5 +816,5 @@ def bridge_labels(
     skip = None if mask is None else ~np.asarray(mask, dtype=bool)
     return run_bridge(
         ranges, elevation, threshold_m, gamma_deg, reach_px, min_size, skip, weights, None, None,
-        fixed_side_gaps,
+        fixed_side_gaps, level_dz_m, level_margin, level_cap_m,
     )  # fmt: skip
