@@ -698,9 +698,7 @@ def run_bridge(
     )
     cos_t, sin_t = cached_walk_tables(elevation, ranges.shape[1], int(reach_px))
     level_on = level_dz_m > 0
-    spacing = (
-        cached_level_tables(elevation, int(reach_px)) if level_on else np.zeros((1, 1))
-    )
+    spacing = cached_level_tables(elevation, int(reach_px)) if level_on else np.zeros((1, 1))
     level = (
         bool(level_on), np.sin(elevation.astype(np.float64)), spacing, float(level_dz_m),
         float(level_margin), float(level_cap_m),
