@@ -66,21 +66,26 @@ hood 0.7 m below the sensor), at the same height: a car's top or hood falls apar
 under any fixed link distance, and the car splits where the scan passes from its rear face onto
 its top. With ``level_dz_m`` the *up* walk (only it) also links p to the node ``q_k`` when
 
-    |z_q - z_p| < level_dz_m   and
-    |p - q_k| < min(level_cap_m, level_margin |z_p| |cot(e_{r-k}) - cot(e_r)|)
+    |z_q - z_p| < level_dz_m   and   |p - q_k| < L <= level_cap_m,
+    L = level_margin |z_p| |cot(e_{r-k}) - cot(e_r)|
 
 (``z = d sin(e)``; no level link where the two rows' elevations differ in sign or one is 0: a
-level surface is then not hit by both beams). The walk's other rules stay: it stops on free space
-(a farther node not linked, a farther range outside the mask), and its bound uses
-``max(t_p, level_cap_m)``. Why this does not join p to something farther at the same height: a
-level link needs a return at p's height exactly where the beam above p would meet the level
-surface through p (to within ``level_dz_m`` in height, so within ``level_dz_m / |tan e|`` in
-range); a wall or a second car farther behind is hit by that beam on its face, lower by
-``(gap) |tan e|`` than p, or not at all (the beam passes over it), and the beams between p and q
-(walks over ``k > 1`` rows) show no return or a nearer one (a farther one stops the walk). What
-the scan cannot tell from a level surface -- a second object whose top edge lies at p's height
-within the footprint spacing -- it joins. The ground is removed before clustering (by label or by
-the ground remover), so no level links arise inside it.
+level surface is then not hit by both beams). ``L`` is the footprint spacing a level surface at
+p's height would show between the two beams, times a margin; where it exceeds the cap (far
+away, or near the sensor's height: with the defaults beyond about 12 m for a car's hood) the scan
+samples such a surface too sparsely to tell its continuation from another object behind, and
+there is no level link. The walk's other rules stay: it stops on free space (a farther node not
+linked, a farther range outside the mask), and its bound uses ``max(t_p, level_cap_m)``.
+
+Why it does not join p to something farther at the same height (a car's top to a wall's top, or
+to the next car): a level link needs a return at p's height (within ``level_dz_m``) where the
+beam above p meets the level surface through p, within the footprint spacing. A wall or car
+standing farther behind is hit by that beam on its face, ``gap |tan e|`` lower than p, or missed
+(the beam passes above it), and the beams between p and q (walks over ``k > 1`` rows) show no
+return or a nearer one (a farther one stops the walk). What the scan cannot tell from a level
+surface -- a second object whose top edge lies at p's height within one footprint spacing, like
+``box-pair`` of results/bridge-cases/ at 8-12 m -- it joins. The ground is removed before
+clustering (by label or by the ground remover), so no level links arise inside it.
 """
 
 from __future__ import annotations
@@ -323,12 +328,12 @@ def _level_edge(
 ) -> bool:
     """The level-surface link of the up walk (module docstring, "Level surfaces"): the nodes
     at ranges ``d`` (p) and ``dq`` (q, ``k`` rows above, same column) lie at heights within
-    ``dz`` of each other, and closer than ``min(cap, margin |z_p| spacing)``, the footprint
-    spacing a level surface at p's height would show between their beams."""
+    ``dz`` of each other, and closer than ``L = margin |z_p| spacing`` (the footprint spacing a
+    level surface at p's height would show between their beams, times the margin), ``L <= cap``."""
     zp = d * se_p
     zq = dq * se_q
-    lim = min(cap, margin * abs(zp) * spacing)
-    return (abs(zq - zp) < dz) & distance_edge(d, dq, cos_k, lim * lim)
+    lim = margin * abs(zp) * spacing
+    return (abs(zq - zp) < dz) & (lim <= cap) & distance_edge(d, dq, cos_k, lim * lim)
 
 
 @njit(cache=True, inline="always")
@@ -729,7 +734,8 @@ class Bridge:
         (module docstring, "Level surfaces").
     level_margin : the level link reaches this many times the footprint spacing of a level
         surface at p's height between the two beams.
-    level_cap_m : the level link's longest reach, metres.
+    level_cap_m : no level link where the footprint it follows (times the margin) exceeds this,
+        metres.
     """
 
     threshold_m: Annotated[float, Field(gt=0, description="link distance near, metres")] = 0.35
