@@ -58,30 +58,32 @@ column). This splits such people at any range where something is seen behind the
 50 shared KITTI frames far, sparse cars show such columns too and the rule costs 2.6 points of
 IoU_mu there (results/bridge-cases/), so it is not the default.
 
-Level surfaces (``level_dz_m`` > 0; 0 = off, the default)
----------------------------------------------------------
+Level surfaces (``level_tolerance`` > 0; 0 = off, the default)
+--------------------------------------------------------------
 On a horizontal surface at height ``z`` (sensor frame) the beams of rows ``r`` and ``r - k`` hit
-``|z| |cot(e_{r-k}) - cot(e_r)|`` apart (about ``d^2 de / |z|``: 0.5 m at 8 m, 2 m at 16 m for a
-hood 0.7 m below the sensor), at the same height: a car's top or hood falls apart row by row
-under any fixed link distance, and the car splits where the scan passes from its rear face onto
-its top. With ``level_dz_m`` the *up* walk (only it) also links p to the node ``q_k`` when
+``F = |z| |cot(e_{r-k}) - cot(e_r)|`` apart, the *footprint spacing* (about ``d^2 de / |z|``:
+0.5 m at 8 m, 2 m at 16 m for a hood 0.7 m below the sensor), at the same height: a car's top or
+hood falls apart row by row under any fixed link distance, and the car splits where the scan
+passes from its rear face onto its top. With ``level_tolerance`` the *up* walk (only it) also
+links p to the node ``q_k`` when q lies where the level surface through p meets q's beam,
+within ``level_tolerance`` footprints along it, and within the margin:
 
-    |z_q - z_p| < level_dz_m   and   |p - q_k| < L <= level_cap_m,
-    L = level_margin |z_p| |cot(e_{r-k}) - cot(e_r)|
+    |z_q - z_p| < level_tolerance F |tan e_{r-k}|   and   |p - q_k| < L = level_margin F,
+    L <= level_cap_m
 
-(``z = d sin(e)``; no level link where the two rows' elevations differ in sign or one is 0: a
-level surface is then not hit by both beams). ``L`` is the footprint spacing a level surface at
-p's height would show between the two beams, times a margin; where it exceeds the cap (far
-away, or near the sensor's height: with the defaults beyond about 12 m for a car's hood) the scan
-samples such a surface too sparsely to tell its continuation from another object behind, and
-there is no level link. The walk's other rules stay: it stops on free space (a farther node not
-linked, a farther range outside the mask), and its bound uses ``max(t_p, level_cap_m)``.
+(``z = d sin(e)``, ``F`` from p's height; a range error ``x`` along a beam of elevation ``e``
+is a height error ``x |tan e|``). No level link where the two rows' elevations differ in sign or
+one is 0 (a level surface is then not hit by both beams), nor where ``L`` exceeds the cap (far
+away, or near the sensor's height: the scan samples such a surface too sparsely to tell its
+continuation from another object behind). The walk's other rules stay: it stops on free space
+(a farther node not linked, a farther range outside the mask), and its bound uses
+``max(t_p, level_cap_m)``.
 
 Why it does not join p to something farther at the same height (a car's top to a wall's top, or
-to the next car): a level link needs a return at p's height (within ``level_dz_m``) where the
-beam above p meets the level surface through p, within the footprint spacing. A wall or car
-standing farther behind is hit by that beam on its face, ``gap |tan e|`` lower than p, or missed
-(the beam passes above it), and the beams between p and q (walks over ``k > 1`` rows) show no
+to the next car): a level link needs a return within ``level_tolerance F`` of the point where
+q's beam meets the level surface through p. A face standing elsewhere behind p's edge is hit by
+that beam ``|offset| |tan e|`` above or below p's height, beyond the tolerance (or missed, the
+beam passing above it), and the beams between p and q (walks over ``k > 1`` rows) show no
 return or a nearer one (a farther one stops the walk). What the scan cannot tell from a level
 surface -- a second object whose top edge lies at p's height within one footprint spacing, like
 ``box-pair`` of results/bridge-cases/ at 8-12 m -- it joins. The ground is removed before
@@ -208,7 +210,7 @@ def _walk_row(
     ``level``: the level-surface rule of the up walk (:func:`level_tables`, module docstring).
     """
     one = np.uint64(1)
-    level_on, sin_e, spacing, level_dz, level_margin, level_cap = level
+    level_on, sin_e, tan_e, spacing, level_tol, level_margin, level_cap = level
     row = r * w
     k_diag = min(k_up, k_row)
     for di in range(4):
@@ -247,6 +249,7 @@ def _walk_row(
             row_q = (r + step * dr) * w
             se_p = sin_e[r]
             se_q = sin_e[r + step * dr]
+            te_q = tan_e[r + step * dr]
             sp_k = spacing[r, step] if lv_walk else 0.0
             going = 0
             for t in range(m):
@@ -268,7 +271,7 @@ def _walk_row(
                 linked = (dq > 0.0) & distance_edge(d, dq, cos_k, tp2)
                 if lv_walk:
                     linked |= (dq > 0.0) & _level_edge(
-                        d, dq, se_p, se_q, cos_k, sp_k, level_dz, level_margin, level_cap
+                        d, dq, se_p, se_q, te_q, cos_k, sp_k, level_tol, level_margin, level_cap
                     )
                 free = (dq > d) | ((dq <= 0.0) & (raw[q] > d))
                 link_c[n_links] = c
@@ -284,10 +287,10 @@ def _walk_row(
             union(parent, labels[row + link_c[t]], labels[link_q[t]])
 
 
-#: The level-surface rule as the kernel takes it: (on, sin of the row elevations (H,), the
-#: footprint spacing table of :func:`level_tables` (H, reach + 1), height tolerance (m),
-#: margin, cap (m)).
-LevelRule = tuple[bool, np.ndarray, np.ndarray, float, float, float]
+#: The level-surface rule as the kernel takes it: (on, sin and |tan| of the row elevations
+#: (H,), the footprint spacing table of :func:`level_tables` (H, reach + 1), tolerance
+#: (footprints), margin, cap (m)).
+LevelRule = tuple[bool, np.ndarray, np.ndarray, np.ndarray, float, float, float]
 
 
 @njit(cache=True)
@@ -320,20 +323,25 @@ def _level_edge(
     dq: float,
     se_p: float,
     se_q: float,
+    te_q: float,
     cos_k: float,
     spacing: float,
-    dz: float,
+    tolerance: float,
     margin: float,
     cap: float,
 ) -> bool:
-    """The level-surface link of the up walk (module docstring, "Level surfaces"): the nodes
-    at ranges ``d`` (p) and ``dq`` (q, ``k`` rows above, same column) lie at heights within
-    ``dz`` of each other, and closer than ``L = margin |z_p| spacing`` (the footprint spacing a
-    level surface at p's height would show between their beams, times the margin), ``L <= cap``."""
+    """The level-surface link of the up walk (module docstring, "Level surfaces"): q (range
+    ``dq``, ``k`` rows above p, same column) lies within ``tolerance`` footprints of where the
+    level surface through p (range ``d``) meets q's beam (``te_q``: |tan| of its elevation),
+    and closer to p than ``L = margin F``, ``L <= cap`` (``F = |z_p| spacing``, the footprint
+    spacing of :func:`level_tables`, metres).
+    """
     zp = d * se_p
     zq = dq * se_q
-    lim = margin * abs(zp) * spacing
-    return (abs(zq - zp) < dz) & (lim <= cap) & distance_edge(d, dq, cos_k, lim * lim)
+    foot = abs(zp) * spacing
+    lim = margin * foot
+    tol = tolerance * foot * te_q
+    return (abs(zq - zp) < tol) & (lim <= cap) & distance_edge(d, dq, cos_k, lim * lim)
 
 
 @njit(cache=True, inline="always")
@@ -440,8 +448,9 @@ def _first_steps_level(
     further: bool,
     se_p: float,
     se_q: float,
+    te_q: float,
     spacing: float,
-    dz: float,
+    tolerance: float,
     margin: float,
     cap: float,
 ) -> None:
@@ -454,7 +463,11 @@ def _first_steps_level(
         tp = threshold if threshold >= t else t
         ok = (dd > 0.0) & (dd * sin_1 < max(tp, cap))
         linked = ok & (q > 0.0) & distance_edge(dd, q, cos_1, tp * tp)
-        linked |= ok & (q > 0.0) & _level_edge(dd, q, se_p, se_q, cos_1, spacing, dz, margin, cap)
+        linked |= (
+            ok
+            & (q > 0.0)
+            & _level_edge(dd, q, se_p, se_q, te_q, cos_1, spacing, tolerance, margin, cap)
+        )
         free = ((q > 0.0) & (q > dd)) | ((q <= 0.0) & (rq[c] > dd))
         link[c] = linked
         on[c] = ok & ~linked & ~free & further
@@ -555,7 +568,7 @@ def _bridge_components(
                 _first_steps_level(
                     up[:w], up_on[:w], d, above, raw_above, threshold, sin_gamma,
                     cos_t[1, r, 1], sin_t[1, r, 1], k_up >= 2, level[1][r], level[1][r - 1],
-                    level[2][r, 1], level[3], level[4], level[5],
+                    level[2][r - 1], level[3][r, 1], level[4], level[5], level[6],
                 )  # fmt: skip
             else:
                 _first_steps(
@@ -688,25 +701,25 @@ def run_bridge(
     point_pixel: np.ndarray | None = None,
     attached: np.ndarray | None = None,
     fixed_side_gaps: bool = False,
-    level_dz_m: float = 0.0,
+    level_tolerance: float = 0.0,
     level_margin: float = 1.5,
     level_cap_m: float = 2.0,
 ) -> np.ndarray:
     """Bridge labels per pixel, or per point given ``point_pixel`` (see :func:`bridge_labels`;
     ``skip``: pixels left out even with a range, e.g. ground; ``attached``: held pixels, see
-    :func:`flic_cli.methods.connections.components`; ``level_dz_m`` > 0 turns the level-surface
-    rule on)."""
+    :func:`flic_cli.methods.connections.components`; ``level_tolerance`` > 0 turns the
+    level-surface rule on)."""
     if reach_px < 1:
         raise ValueError(f"reach_px must be >= 1, got {reach_px}")
     ranges, elevation, skip, use_skip, weights, use_weights = kernel_inputs(
         ranges, elevation, skip, weights
     )
     cos_t, sin_t = cached_walk_tables(elevation, ranges.shape[1], int(reach_px))
-    level_on = level_dz_m > 0
+    level_on = level_tolerance > 0
     spacing = cached_level_tables(elevation, int(reach_px)) if level_on else np.zeros((1, 1))
     level = (
-        bool(level_on), np.sin(elevation.astype(np.float64)), spacing, float(level_dz_m),
-        float(level_margin), float(level_cap_m),
+        bool(level_on), np.sin(elevation), np.abs(np.tan(elevation)), spacing,
+        float(level_tolerance), float(level_margin), float(level_cap_m),
     )  # fmt: skip
     args = (
         ranges, skip, use_skip, cos_t, sin_t, float(threshold_m),
@@ -730,7 +743,8 @@ class Bridge:
     min_size : smallest cluster kept, points of the evaluated set (a pixel counts its points).
     fixed_side_gaps : a walk with a sideways step that has passed an open gap links only within
         ``threshold_m`` (module docstring, "Gaps beside"); off by default.
-    level_dz_m : height tolerance of the level-surface link of the up walk, metres; 0 = off
+    level_tolerance : the level-surface link of the up walk: how far from where a level surface
+        through p would meet q's beam q may lie, a fraction of the footprint spacing; 0 = off
         (module docstring, "Level surfaces").
     level_margin : the level link reaches this many times the footprint spacing of a level
         surface at p's height between the two beams.
@@ -747,8 +761,8 @@ class Bridge:
     fixed_side_gaps: Annotated[
         bool, Field(description="sideways walks over open gaps link within threshold_m only")
     ] = False
-    level_dz_m: Annotated[
-        float, Field(ge=0, lt=1, description="level link height tolerance, metres (0 = off)")
+    level_tolerance: Annotated[
+        float, Field(ge=0, le=1, description="level link tolerance, footprints (0 = off)")
     ] = 0.0
     level_margin: Annotated[
         float, Field(gt=0, le=10, description="level link: times the footprint spacing")
@@ -775,7 +789,7 @@ class Bridge:
             image.point_pixel,
             attached,
             self.fixed_side_gaps,
-            self.level_dz_m,
+            self.level_tolerance,
             self.level_margin,
             self.level_cap_m,
         )
@@ -791,7 +805,7 @@ def bridge_labels(
     mask: np.ndarray | None = None,
     weights: np.ndarray | None = None,
     fixed_side_gaps: bool = Bridge.fixed_side_gaps,
-    level_dz_m: float = Bridge.level_dz_m,
+    level_tolerance: float = Bridge.level_tolerance,
     level_margin: float = Bridge.level_margin,
     level_cap_m: float = Bridge.level_cap_m,
 ) -> np.ndarray:
@@ -810,8 +824,8 @@ def bridge_labels(
     weights : (H, W) int, points per pixel (default 1 per pixel).
     fixed_side_gaps : sideways walks over open gaps link within ``threshold_m`` only (module
         docstring, "Gaps beside").
-    level_dz_m, level_margin, level_cap_m : the level-surface link of the up walk (module
-        docstring, "Level surfaces"; ``level_dz_m`` 0 = off), metres, -, metres.
+    level_tolerance, level_margin, level_cap_m : the level-surface link of the up walk (module
+        docstring, "Level surfaces"; ``level_tolerance`` 0 = off), -, -, metres.
 
     Returns
     -------
@@ -820,5 +834,5 @@ def bridge_labels(
     skip = None if mask is None else ~np.asarray(mask, dtype=bool)
     return run_bridge(
         ranges, elevation, threshold_m, gamma_deg, reach_px, min_size, skip, weights, None, None,
-        fixed_side_gaps, level_dz_m, level_margin, level_cap_m,
+        fixed_side_gaps, level_tolerance, level_margin, level_cap_m,
     )  # fmt: skip
