@@ -88,6 +88,11 @@ return or a nearer one (a farther one stops the walk). What the scan cannot tell
 surface -- a second object whose top edge lies at p's height within one footprint spacing, like
 ``box-pair`` of results/bridge-cases/ at 8-12 m -- it joins. The ground is removed before
 clustering (by label or by the ground remover), so no level links arise inside it.
+
+Measured (results/bridge-cases/, "A rule for cause 2"): with ``level_tolerance = 0.25`` a van
+seen from the front and a car seen from behind are whole at 8 m (van 56 -> 100, car 65 -> 90 %
+IoU), the 50 shared KITTI frames gain 0.15 points of IoU_mu, but the synthetic sample loses 1.9
+(rows of identical parked cars, people before cars, joined as above), so it is off by default.
 """
 
 from __future__ import annotations
