@@ -34,11 +34,28 @@ def level_spacing(elevation, r, rq):
     return abs(1.0 / np.tan(b) - 1.0 / np.tan(a))
 
 
+def level_pair(pts, elevation, a, b, level, margins):
+    """Whether node b (above a in its column) lies within ``tol`` footprints of where the level
+    surface through a meets b's beam, closer than ``L = margin F <= cap`` (F: the footprint
+    spacing at a's height); every test's margin is appended to ``margins``."""
+    spacing = level_spacing(elevation, a[0], b[0])
+    if spacing is None:
+        return False
+    tol, margin, cap = level[:3]
+    za, zb = pts[a][2], pts[b][2]
+    foot = abs(za) * spacing
+    lim = margin * foot
+    dz = tol * foot * abs(np.tan(elevation[b[0]]))
+    dist = float(np.linalg.norm(pts[a] - pts[b]))
+    margins.extend([abs(zb - za) - dz, dist - lim, lim - cap])
+    return abs(zb - za) < dz and dist < lim and lim <= cap
+
+
 def bridge_graph(
     ranges, elevation, mask, threshold, gamma_deg, reach, fixed_side_gaps=True, level=None
 ):
     """Edges of the Bridge graph, walked exactly as the module docstring says; ``level``:
-    (tolerance, margin, cap) of the level-surface rule of the up walk, or None (off).
+    (tolerance, margin, cap, supported only) of the level rule of the up walk, or None (off).
 
     Returns the edges and, for every distance test made, ``distance - t_p`` (to stay away from
     ties between float32 ranges and float64 coordinates) and, for every gap test, the smallest
@@ -79,17 +96,22 @@ def bridge_graph(
                     dist = float(np.linalg.norm(pts[r, c] - pts[rq, cq]))
                     margins.append(dist - tp)
                     linked = dist < tp
-                    spacing = level_spacing(elevation, r, rq) if level and (dr, dc) == UP else None
-                    if spacing is not None:
-                        # q within tol footprints of where the level surface through p meets
-                        # q's beam: |z_q - z_p| < tol * footprint * |tan e_q|
-                        tol, margin, cap = level
-                        zp, zq = pts[r, c, 2], pts[rq, cq, 2]
-                        foot = abs(zp) * spacing
-                        lim = margin * foot
-                        dz = tol * foot * abs(np.tan(elevation[rq]))
-                        margins += [abs(zq - zp) - dz, dist - lim, lim - cap]
-                        linked |= abs(zq - zp) < dz and dist < lim and lim <= cap
+                    if level and (dr, dc) == UP and not linked:
+                        # level with p, and the node right below p level with p or the node
+                        # right above q level with q
+                        def lv(a, b):
+                            return (
+                                node[a]
+                                and node[b]
+                                and level_pair(pts, elevation, a, b, level, margins)
+                            )
+
+                        below, above = (r + 1, c), (rq - 1, cq)
+                        linked = lv((r, c), (rq, cq)) and (
+                            not level[3]
+                            or (r + 1 < h and lv(below, (r, c)))
+                            or (rq >= 1 and lv((rq, cq), above))
+                        )
                     if linked:
                         edges.append((r * w + c, rq * w + cq))
                         ends[(dr, dc)] = k
@@ -109,7 +131,7 @@ def bridge_graph(
     fixed=st.booleans(),
     level=st.one_of(
         st.none(),
-        st.tuples(st.floats(0.05, 1.0), st.floats(0.5, 3.0), st.floats(0.3, 6.0)),
+        st.tuples(st.floats(0.05, 1.0), st.floats(0.5, 3.0), st.floats(0.3, 6.0), st.booleans()),
     ),
 )
 def test_bridge_equals_components_of_its_graph(
@@ -120,7 +142,7 @@ def test_bridge_equals_components_of_its_graph(
     assume(all(abs(m) > 1e-4 for m in margins))
     node = mask & (ranges > 0)
     expected = image_components(ranges.shape, node, edges, min_size, weights)
-    lv = level or (0.0, 1.5, 2.0)
+    lv = level or (0.0, 1.5, 2.0, False)
     got = bridge_labels(
         ranges, elevation, threshold, gamma, reach, min_size, mask, weights, fixed, *lv
     )
@@ -416,7 +438,7 @@ def box_scenes(draw):
     threshold=st.floats(0.2, 1.0),
     gamma=st.sampled_from([0.0, 2.0]),
     reach=st.integers(1, 12),
-    level=st.tuples(st.floats(0.05, 1.0), st.floats(0.5, 3.0), st.floats(0.3, 6.0)),
+    level=st.tuples(st.floats(0.05, 1.0), st.floats(0.5, 3.0), st.floats(0.3, 6.0), st.booleans()),
 )
 def test_bridge_with_level_surfaces_equals_its_graph_on_boxes(
     scene, threshold, gamma, reach, level
