@@ -255,6 +255,9 @@ def _walk_row(
             cos_k = cos_t[di, r, step]
             sin_k = sin_t[di, r, step]
             row_q = (r + step * dr) * w
+            r_q = r + step * dr
+            se_p, se_q, te_q = sin_e[r], sin_e[r_q], tan_e[r_q]
+            sp_k = spacing[r, step] if lv_walk else 0.0
             going = 0
             for t in range(m):
                 c = walks[t]
@@ -273,11 +276,16 @@ def _walk_row(
                 # (tp never grows along a walk; a level link is never longer than level_cap)
                 bound = d * sin_k >= (max(tp, level_cap) if lv_walk else tp)
                 linked = (dq > 0.0) & distance_edge(d, dq, cos_k, tp2)
-                if lv_walk and dq > 0.0:
-                    linked |= _supported_level(
-                        nodes, w, r, step, c, d, dq, cos_k, cos_t, sin_e, tan_e, spacing,
-                        level_tol, level_margin, level_cap, support,
-                    )  # fmt: skip
+                if lv_walk:
+                    lv = (dq > 0.0) & _level_edge(
+                        d, dq, se_p, se_q, te_q, cos_k, sp_k, level_tol, level_margin, level_cap
+                    )
+                    if support and lv and not linked:  # (rare: only then look for support)
+                        lv = _supported_level(
+                            nodes, w, r, step, c, d, dq, cos_k, cos_t, sin_e, tan_e, spacing,
+                            level_tol, level_margin, level_cap, True,
+                        )  # fmt: skip
+                    linked |= lv
                 free = (dq > d) | ((dq <= 0.0) & (raw[q] > d))
                 link_c[n_links] = c
                 link_q[n_links] = q
@@ -506,8 +514,11 @@ def _first_steps_level(
     level: LevelRule,
 ) -> None:
     """:func:`_first_steps` of the up walk of row ``r`` with the level-surface rule: a link also
-    where :func:`_supported_level` holds; the walk's bound reaches ``max(t_p, cap)``."""
+    where :func:`_supported_level` holds; the walk's bound reaches ``max(t_p, cap)``. The level
+    test itself runs branch-free over the row; the support (``level_supported``) is checked
+    afterwards for the links that need it."""
     _, sin_e, tan_e, spacing, tol, margin, cap, support = level
+    se_p, se_q, te_q, sp = sin_e[r], sin_e[r - 1], tan_e[r - 1], spacing[r, 1]
     for c in range(d.size):
         dd = np.float64(d[c])
         q = np.float64(dq[c])
@@ -515,14 +526,26 @@ def _first_steps_level(
         tp = threshold if threshold >= t else t
         ok = (dd > 0.0) & (dd * sin_1 < max(tp, cap))
         linked = ok & (q > 0.0) & distance_edge(dd, q, cos_1, tp * tp)
-        if ok and q > 0.0 and not linked:
-            linked = _supported_level(
-                nodes, w, r, 1, c, dd, q, cos_1, cos_t, sin_e, tan_e, spacing, tol, margin, cap,
-                support,
-            )  # fmt: skip
+        linked |= ok & (q > 0.0) & _level_edge(dd, q, se_p, se_q, te_q, cos_1, sp, tol, margin, cap)
         free = ((q > 0.0) & (q > dd)) | ((q <= 0.0) & (rq[c] > dd))
         link[c] = linked
         on[c] = ok & ~linked & ~free & further
+    if not support:
+        return
+    for c in range(d.size):
+        if not link[c]:
+            continue
+        dd = np.float64(d[c])
+        q = np.float64(dq[c])
+        tp = max(threshold, dd * sin_gamma)
+        if distance_edge(dd, q, cos_1, tp * tp):
+            continue
+        if not _supported_level(
+            nodes, w, r, 1, c, dd, q, cos_1, cos_t, sin_e, tan_e, spacing, tol, margin, cap, True
+        ):
+            link[c] = False  # a level link without support: the walk goes on unless free space
+            free = q > dd
+            on[c] = (not free) & further
 
 
 @njit(cache=True)
