@@ -257,12 +257,10 @@ def for_dataset(config: Config, ds: Any, refs: list) -> Config:
     return config if beams is None else for_beams(config, beams)[0]
 
 
-def derived_lines(beams: BeamTable, config: Config | None = None) -> list[str]:
-    """What a run derives from ``beams`` with ``config`` (the shipped presets when None), as
-    ``flic info`` prints it: Bridge's link distances and column's run limits."""
-    from flic_cli.config.parser import load_config
-
-    config = load_config() if config is None else config
+def derived_lines(beams: BeamTable, config: Config) -> list[str]:
+    """What a run derives from ``beams`` with ``config`` (e.g. the shipped presets,
+    ``flic_cli.config.load_config()``), as ``flic info`` prints it: Bridge's link distances and
+    column's run limits."""
     applied = for_beams(config, beams)[1]
     bridge = {tuple(sorted(v.items())) for k, v in applied.items()}
     text = "; ".join(", ".join(f"{k} = {v:g}" for k, v in b) for b in sorted(bridge))

@@ -354,6 +354,16 @@ PY
     python scripts/sensors_synthetic.py --frames 20 --methods bridge,dbscan \
       --sensors vlp32c,hdl32e,os1-64,hdl64e,os2-128,os1-128 \
       --out "$out/bridge-dbscan-20frames" --work "$TMP/sensors-bd20"
+    # since the runs derive the sensor-dependent parameters from the data (docs/sensors.md)
+    python scripts/sensors_synthetic.py --frames 20 --methods flic0,flic1,flic6,flic14,bridge,dbscan \
+      --out "$out/derived-20frames" --work "$TMP/sensors-s20e"
+    python scripts/sensors_ground_column.py --frames 20 --work "$TMP/sensors-s20" \
+      --out "$out/ground-column/before_after.csv"
+    python scripts/sensors_mc_degrees.py --frames 20 --work "$TMP/sensors-s20" \
+      --out "$out/mc-degrees"
+    python scripts/sensor_links.py --work "$TMP/sensors-s20" --frames 20 \
+      --out "$TMP/vertical_links20.csv" --mc "$out/mc_links.csv"
+    python scripts/sensor_params_recordings.py
     ;;
   bags)
     # ROS bags: docs/ros.md
@@ -378,26 +388,12 @@ from bagtools import cycled_vlp16_bag; cycled_vlp16_bag(Path('../shared/data'), 
     python scripts/sensors/ouster_sdk_comparison.py --sdk-python "$OUSTER_PY"
     ;;
   peers)
-    # the field's clusterers (SLR, CVC, ALPINE, HDBSCAN, Euclidean): docs/peers.md
-    ev=results/peers/evaluate
-    for name in main more alpine-agnostic hdbscan; do fresh "$ev/$name"; done
-    flic evaluate "$DATA" --setting no-ground --semantics oracle --jobs "$JOBS" \
-      --methods bogoslavskyi,flic0,flic1,flic6,flic14,flic1n,flic6n,flic14n,bridge,dbscan,slr,cvc,alpine,alpine-k32 \
-      --out "$ev/main"
-    flic evaluate "$DATA" --setting no-ground --semantics oracle --jobs "$JOBS" \
-      --methods euclidean,alpine-agnostic --out "$ev/more"
-    # the alpine-agnostic row of which_clusterer, with its preset's width_m 0.45 m
-    flic evaluate "$DATA" --setting no-ground --semantics oracle --jobs "$JOBS" \
-      --methods alpine-agnostic --out "$ev/alpine-agnostic"
-    flic evaluate "$DATA" --frames 0:1 --setting no-ground --semantics oracle \
-      --methods hdbscan,bridge,dbscan,flic0,euclidean --out "$ev/hdbscan"
-    rm -rf "$ev"/*/parts "$ev"/*/run.json
-    python scripts/peers_which_clusterer.py results/peers/which_clusterer "$ev/main" \
-      "$ev/alpine-agnostic" "$ev/more" "$ev/hdbscan"
-    # their sweeps: results/peers/sweeps/README.md
+    # the field's clusterers (SLR, CVC, ALPINE, HDBSCAN, Euclidean) and "which clusterer?":
+    # docs/peers.md, results/peers/sweeps/README.md
+    bash scripts/peers_which_clusterer.sh "$DATA" results/peers "$JOBS"
     sample "$TMP/sample-seed0" 20 0
     bash scripts/peers_sweeps.sh "$DATA" "$TMP/sample-seed0/semantickitti"
-    bash scripts/peers_sweeps_small.sh "$DATA" "$TMP/sample-seed0/semantickitti"
+    bash scripts/peers_sweeps_rest.sh "$DATA" "$TMP/sample-seed0/semantickitti" "$JOBS"
     ;;
   peers-fidelity)
     if [ -z "${FLIC_REF:-}" ]; then
@@ -406,7 +402,9 @@ from bagtools import cycled_vlp16_bag; cycled_vlp16_bag(Path('../shared/data'), 
     fi
     python scripts/peers_fidelity.py "$DATA" results/peers/fidelity
     python scripts/peers_ref_diff.py "$DATA" > results/peers/fidelity/ref_diff.txt
-    python scripts/peers_euclidean_fidelity.py "$DATA" results/peers/fidelity
+    python scripts/peers_euclidean_fidelity.py "$DATA" results/peers/fidelity \
+      "$TMP/sample-seed0/semantickitti" 3
+    python scripts/peers_ref_ablation.py "$DATA" results/peers/fidelity --every 5
     ;;
   cpp)
     # their C++ against flic, alternating in one session, on both logs; their ground masks

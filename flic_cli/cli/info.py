@@ -132,9 +132,10 @@ def describe(
         else:
             how = "ring recovery from the scan order" if "rings" in projections else "spherical"
             lines.append(f"  beam angles from: estimated ({how}; [projection] of the config)")
+        from flic_cli.config import load_config
         from flic_cli.sensor_params import BeamTable, derived_lines
 
-        lines += [f"  {line}" for line in derived_lines(BeamTable.of_image(image))]
+        lines += [f"  {line}" for line in derived_lines(BeamTable.of_image(image), load_config())]
     return lines
 
 

@@ -105,11 +105,14 @@ class Config:
 
 
 def _fields(component: Any) -> dict[str, Any]:
-    """A component's parameters as plain TOML/JSON values (tuples become lists)."""
+    """A component's parameters as plain TOML/JSON values (tuples become lists). A parameter
+    whose value is None (unset: e.g. column's ``run_jump``, derived from the beam table) is left
+    out, as TOML has no null and reading the table back gives it its default None again."""
 
     def plain(value: Any) -> Any:
         if isinstance(value, tuple | list):
             return [plain(v) for v in value]
         return value
 
-    return {f.name: plain(getattr(component, f.name)) for f in dataclasses.fields(component)}
+    values = {f.name: getattr(component, f.name) for f in dataclasses.fields(component)}
+    return {name: plain(value) for name, value in values.items() if value is not None}
