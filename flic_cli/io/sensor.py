@@ -14,6 +14,7 @@ from typing import Any
 import numpy as np
 
 from flic_cli.errors import FlicInputError
+from flic_cli.io.semantickitti import export_path, write_cluster_prediction
 
 #: Where a sensor model's beam angles came from (:attr:`SensorModel.angles_from`).
 ANGLE_SOURCES = {
@@ -254,22 +255,7 @@ class SensorFileDataset:
         """Read one frame (a :class:`flic_cli.io.base.Frame` with its sensor range image)."""
         return self._load(self.infos[ref.sequence], ref.index)
 
-    @staticmethod
-    def write_prediction(
-        out: Path,
-        ref,  # noqa: ANN001
-        labels: np.ndarray,
-        image=None,  # noqa: ANN001
-        semantics: np.ndarray | None = None,
-    ) -> Path:
-        """Write one frame's cluster ids, one per point of the frame as read:
-        ``<out>/sequences/<recording>/predictions/<frame:06d>.label``."""
-        from flic_cli.io.semantickitti import write_predictions
-
-        return write_predictions(out, ref.sequence, ref.frame, labels, semantics)
-
-    @staticmethod
-    def export_path(out: Path, ref, suffix: str) -> Path:  # noqa: ANN001
-        """Where a per-frame export goes: ``<out>/sequences/<recording>/<kind>/NNNNNN<suffix>``."""
-        kind = suffix.lstrip(".")
-        return Path(out) / "sequences" / ref.sequence / kind / f"{ref.frame:06d}{suffix}"
+    #: ``<out>/sequences/<recording>/predictions/<frame:06d>.label``: cluster ids, one per
+    #: point of the frame as read; exports in the same layout.
+    write_prediction = staticmethod(write_cluster_prediction)
+    export_path = staticmethod(export_path)
