@@ -23,8 +23,10 @@ from flic_cli import registry
 app = typer.Typer(
     name="flic",
     help=(
-        "FLIC (Fast Lidar Image Clustering) and its peers -- Bogoslavskyi & Stachniss, DBSCAN -- "
-        "on SemanticKITTI sequences and Moosmann-style logs: segment, evaluate, benchmark.\n\n"
+        "FLIC (Fast Lidar Image Clustering), Bridge and the field's clusterers -- Bogoslavskyi & "
+        "Stachniss, DBSCAN, Euclidean, SLR, CVC, ALPINE, HDBSCAN -- on SemanticKITTI sequences, "
+        "Moosmann-style logs, sensor recordings (Ouster, Velodyne, PCD, nuScenes) and ROS bags: "
+        "segment, evaluate, benchmark, sweep-threshold.\n\n"
         "Without a DATA path every command runs on a synthetic sample that flic makes itself."
     ),
     no_args_is_help=True,
