@@ -338,6 +338,38 @@ def test_velodyne_load_equals_one_decoding_pass(shared_data: Path) -> None:
     np.testing.assert_array_equal(frame.points, first.points[:, :3])
 
 
+def _same_frame(a, b) -> None:  # noqa: ANN001
+    np.testing.assert_array_equal(a.points, b.points)
+    np.testing.assert_array_equal(a.image.ranges, b.image.ranges)
+    np.testing.assert_array_equal(a.image.point_pixel, b.image.point_pixel)
+    np.testing.assert_array_equal(a.image.point_counts(), b.image.point_counts())
+
+
+def test_velodyne_kept_packets_equal_the_file_read(
+    shared_data: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A frame from the packets kept at open, from the file (a capture over the memory limit)
+    and in a process the dataset was pickled to (the packet objects left behind): the same
+    points and image, over both complete turns of a written HDL-32E capture and the VLP-16's."""
+    import pickle
+
+    from flic_cli.io import velodyne
+
+    for path in (shared_data / SENSORS / VLP16, _velodyne_capture(tmp_path, "HDL32E")[0]):
+        kept = open_dataset(path)
+        assert kept.infos[kept.refs()[0].sequence].state.packets is not None
+        with monkeypatch.context() as m:
+            m.setattr(velodyne, "KEEP_PACKETS_MAX_BYTES", 0)
+            read = open_dataset(path)
+        assert read.infos[read.refs()[0].sequence].state.packets is None
+        moved = pickle.loads(pickle.dumps(kept))
+        assert moved.infos[moved.refs()[0].sequence].state.packets is None
+        for ref in kept.refs():
+            frame = kept.load(ref)
+            _same_frame(frame, read.load(ref))
+            _same_frame(frame, moved.load(ref))
+
+
 @pytest.mark.parametrize(
     ("path", "points", "rows"), [(HELIOS, 15_258, 16), (NEBULA_PCD, 14_831, 16)]
 )
