@@ -615,6 +615,42 @@ def test_ascii_pcd_reads_as_pypcd4_does(tmp_path: Path, capsys: pytest.CaptureFi
     assert code == 2 and "of the 500 points its header declares" in err, err
 
 
+def test_ascii_pcd_hard_numbers_parse_as_pypcd4_does(tmp_path: Path) -> None:
+    """Numbers where a fast float parser can be off by one unit in the last place: the shortest
+    repr of random doubles (17 digits), exponents from 1e-320 (subnormal) to 1e300 in a double
+    field, float32 fields given the exact decimal midpoint between two floats (25 and 40
+    digits, where string -> double -> float rounds twice), nan / inf: pandas' reader (flic's)
+    gives the same bytes as pypcd4's ``numpy.loadtxt``."""
+    from pypcd4 import PointCloud
+
+    from flic_cli.io.pcd import read_pcd
+
+    rng = np.random.default_rng(21)
+    n = 3000
+    f = rng.normal(0, 50, (n, 3)).astype(np.float32)
+    mid = (f.astype(np.float64) + np.nextafter(f, np.float32(np.inf)).astype(np.float64)) / 2
+    wide = rng.normal(0, 1, n) * 10.0 ** rng.uniform(-320, 300, n)
+    lines = []
+    for i in range(n):
+        x, y, z = (f"{v:.25g}" if i % 2 else f"{v:.40f}" for v in mid[i])
+        t = repr(float(wide[i])) if i % 3 else repr(float(rng.normal(0, 50)))
+        lines.append(f"{x} {y} {z} {t}")
+    lines[5] = "nan nan nan nan"
+    lines[7] = "1.5 -inf inf -0.0"
+    head = (
+        "VERSION 0.7\nFIELDS x y z t\nSIZE 4 4 4 8\nTYPE F F F F\nCOUNT 1 1 1 1\n"
+        f"WIDTH {n}\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS {n}\nDATA ascii\n"
+    )
+    path = tmp_path / "hard.pcd"
+    path.write_text(head + "\n".join(lines) + "\n")
+    ours, theirs = read_pcd(path), PointCloud.from_path(path).pc_data
+    assert ours.dtype == theirs.dtype
+    assert ours.tobytes() == theirs.tobytes()
+    xyz = read_pcd(path, ("x", "y", "z"))  # the frame load's path: x, y, z only
+    assert xyz.dtype.names == ("x", "y", "z")
+    assert all(xyz[c].tobytes() == theirs[c].tobytes() for c in "xyz")
+
+
 # ---------------------------------------------------------------------------------------------
 # nuScenes labels: evaluate scores them
 # ---------------------------------------------------------------------------------------------
