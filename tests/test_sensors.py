@@ -338,6 +338,38 @@ def test_velodyne_load_equals_one_decoding_pass(shared_data: Path) -> None:
     np.testing.assert_array_equal(frame.points, first.points[:, :3])
 
 
+def _same_frame(a, b) -> None:  # noqa: ANN001
+    np.testing.assert_array_equal(a.points, b.points)
+    np.testing.assert_array_equal(a.image.ranges, b.image.ranges)
+    np.testing.assert_array_equal(a.image.point_pixel, b.image.point_pixel)
+    np.testing.assert_array_equal(a.image.point_counts(), b.image.point_counts())
+
+
+def test_velodyne_kept_packets_equal_the_file_read(
+    shared_data: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A frame from the packets kept at open, from the file (a capture over the memory limit)
+    and in a process the dataset was pickled to (the packet objects left behind): the same
+    points and image, over both complete turns of a written HDL-32E capture and the VLP-16's."""
+    import pickle
+
+    from flic_cli.io import velodyne
+
+    for path in (shared_data / SENSORS / VLP16, _velodyne_capture(tmp_path, "HDL32E")[0]):
+        kept = open_dataset(path)
+        assert kept.infos[kept.refs()[0].sequence].state.packets is not None
+        with monkeypatch.context() as m:
+            m.setattr(velodyne, "KEEP_PACKETS_MAX_BYTES", 0)
+            read = open_dataset(path)
+        assert read.infos[read.refs()[0].sequence].state.packets is None
+        moved = pickle.loads(pickle.dumps(kept))
+        assert moved.infos[moved.refs()[0].sequence].state.packets is None
+        for ref in kept.refs():
+            frame = kept.load(ref)
+            _same_frame(frame, read.load(ref))
+            _same_frame(frame, moved.load(ref))
+
+
 @pytest.mark.parametrize(
     ("path", "points", "rows"), [(HELIOS, 15_258, 16), (NEBULA_PCD, 14_831, 16)]
 )
@@ -581,6 +613,42 @@ def test_ascii_pcd_reads_as_pypcd4_does(tmp_path: Path, capsys: pytest.CaptureFi
     (tmp_path / "cut.pcd").write_bytes(text[: len(text) * 2 // 3].rsplit(b"\n", 1)[0] + b"\n")
     code, _, err = _cli(["info", tmp_path / "cut.pcd"], capsys)
     assert code == 2 and "of the 500 points its header declares" in err, err
+
+
+def test_ascii_pcd_hard_numbers_parse_as_pypcd4_does(tmp_path: Path) -> None:
+    """Numbers where a fast float parser can be off by one unit in the last place: the shortest
+    repr of random doubles (17 digits), exponents from 1e-320 (subnormal) to 1e300 in a double
+    field, float32 fields given the exact decimal midpoint between two floats (25 and 40
+    digits, where string -> double -> float rounds twice), nan / inf: pandas' reader (flic's)
+    gives the same bytes as pypcd4's ``numpy.loadtxt``."""
+    from pypcd4 import PointCloud
+
+    from flic_cli.io.pcd import read_pcd
+
+    rng = np.random.default_rng(21)
+    n = 3000
+    f = rng.normal(0, 50, (n, 3)).astype(np.float32)
+    mid = (f.astype(np.float64) + np.nextafter(f, np.float32(np.inf)).astype(np.float64)) / 2
+    wide = rng.normal(0, 1, n) * 10.0 ** rng.uniform(-320, 300, n)
+    lines = []
+    for i in range(n):
+        x, y, z = (f"{v:.25g}" if i % 2 else f"{v:.40f}" for v in mid[i])
+        t = repr(float(wide[i])) if i % 3 else repr(float(rng.normal(0, 50)))
+        lines.append(f"{x} {y} {z} {t}")
+    lines[5] = "nan nan nan nan"
+    lines[7] = "1.5 -inf inf -0.0"
+    head = (
+        "VERSION 0.7\nFIELDS x y z t\nSIZE 4 4 4 8\nTYPE F F F F\nCOUNT 1 1 1 1\n"
+        f"WIDTH {n}\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS {n}\nDATA ascii\n"
+    )
+    path = tmp_path / "hard.pcd"
+    path.write_text(head + "\n".join(lines) + "\n")
+    ours, theirs = read_pcd(path), PointCloud.from_path(path).pc_data
+    assert ours.dtype == theirs.dtype
+    assert ours.tobytes() == theirs.tobytes()
+    xyz = read_pcd(path, ("x", "y", "z"))  # the frame load's path: x, y, z only
+    assert xyz.dtype.names == ("x", "y", "z")
+    assert all(xyz[c].tobytes() == theirs[c].tobytes() for c in "xyz")
 
 
 # ---------------------------------------------------------------------------------------------

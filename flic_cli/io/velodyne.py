@@ -226,13 +226,17 @@ class VelodyneScan:
 
 
 def decode_scans(
-    packets: Iterable[tuple[float, bytes]], sensor: VelodyneSensor, remainder: bool = True
+    packets: Iterable[tuple[float, bytes | tuple[int, ...]]],
+    sensor: VelodyneSensor,
+    remainder: bool = True,
 ) -> Iterator[VelodyneScan]:
     """Decode ``(time stamp, payload)`` data packets into revolutions.
 
     Parameters
     ----------
-    packets : data packets (1206 bytes; others are skipped) with their capture time stamps.
+    packets : data packets (1206 bytes, or their 1206 byte values as a tuple of ints, which
+        velodyne-decoder's binding converts fastest; others are skipped) with their capture
+        time stamps.
     sensor : the model to decode with (:func:`detect_sensor`).
     remainder : also yield the incomplete scan left at the end (``complete = False``).
     """
@@ -370,12 +374,28 @@ def _scan_pixels(
 # ---------------------------------------------------------------------------------------------
 
 
+KEEP_PACKETS_MAX_BYTES = 512 * 2**20
+"""Data packets of a pcap up to this many bytes in all are kept at open as velodyne-decoder's
+packet objects, one ``PacketVector`` per revolution (about the packets' own size in memory), so
+that a frame load only decodes and projects; a larger capture is read from the file per frame,
+its packets converted again (0.4 ms per VLP-16 turn)."""
+
+
 @dataclass
 class _PcapState:
+    """What a frame load needs: where the packets lie, and (up to
+    :data:`KEEP_PACKETS_MAX_BYTES`) each revolution's packets ready for velodyne-decoder."""
+
     index: object  # UdpIndex
     sensor: VelodyneSensor
     data: np.ndarray  # indices (into index) of the data packets
     scans: list[tuple[int, int, int]]  # per complete scan: first, last data packet, points
+    packets: list | None = None  # per complete scan: its PacketVector; None = read the file
+
+    def __getstate__(self) -> dict:
+        """Pickled without the packet objects (velodyne-decoder's do not pickle): a worker
+        process reads its frames from the file."""
+        return {**self.__dict__, "packets": None}
 
 
 class VelodynePcapDataset(SensorFileDataset):
@@ -385,6 +405,10 @@ class VelodynePcapDataset(SensorFileDataset):
     capture without lidar packets is reported as such). A frame is one complete revolution as
     velodyne-decoder cuts them; the remainder at the end of the capture is left out (``flic
     info`` lists it). A frame's points are velodyne-decoder's returns, in its order.
+
+    Opening decodes the capture once (to find the revolutions) and keeps each revolution's
+    packets as velodyne-decoder's packet objects (up to :data:`KEEP_PACKETS_MAX_BYTES`); a
+    frame load decodes them again (one C++ call) and makes the range image.
     """
 
     format = FORMAT
@@ -421,23 +445,34 @@ class VelodynePcapDataset(SensorFileDataset):
         given = self.options.get("calibration")
         sensor = detect_sensor([first], path, None if given is None else read_calibration(given))
         kept: list[int] = []
+        keep_packets = data.size * PACKET_SIZE <= KEEP_PACKETS_MAX_BYTES
+        vd = _vd()
+        pending: list = []  # the packet objects of the revolution being decoded
 
-        def packets() -> Iterator[tuple[float, bytes]]:  # data packets, read a chunk at a time
+        def packets() -> Iterator[tuple[float, tuple[int, ...]]]:  # read a chunk at a time
             stamps = index.time[data].tolist()
             for k, payload in enumerate(iter_payloads(index, data)):
                 if is_data_packet(payload):
                     kept.append(k)
-                    yield stamps[k], payload
+                    values = _PACKET_BYTES.unpack(payload)  # the binding's fastest input
+                    if keep_packets:
+                        pending.append(vd.VelodynePacket(stamps[k], values))
+                    yield stamps[k], values
 
         scans, partial = [], []
+        vectors: list = []
         width = 0
-        for scan in decode_scans(packets(), sensor):  # one scan in memory at once
+        for scan in decode_scans(packets(), sensor):  # one scan decoded at once
             if scan.complete:
                 if not scans:  # the sensor model's columns: the first revolution's firings
                     width = int(scan.points["column"].max()) + 1 if len(scan.points) else 1
                 scans.append((scan.first_packet, scan.last_packet, len(scan.points)))
+                if keep_packets:  # pending holds exactly this scan's packets here
+                    vectors.append(vd.PacketVector(pending))
+                    pending.clear()
             else:
                 partial.append(f"remainder of {len(scan.points):,} points")
+        pending.clear()
         data = data[np.array(kept, dtype=np.int64)]
         if not scans:
             raise FlicInputError(
@@ -449,7 +484,7 @@ class VelodynePcapDataset(SensorFileDataset):
             sensor.sensor_model(width),
             np.array([s[2] for s in scans], dtype=np.int64),
             partial,
-            _PcapState(index, sensor, data, scans),
+            _PcapState(index, sensor, data, scans, vectors if keep_packets else None),
         )
 
     @staticmethod
@@ -460,10 +495,14 @@ class VelodynePcapDataset(SensorFileDataset):
         from flic_cli.io.pcap import read_payloads
 
         first, last, n = state.scans[k]
-        which = state.data[first : last + 1]
-        payloads = read_payloads(state.index, which)  # type: ignore[arg-type]
-        stamps = state.index.time[which].tolist()  # type: ignore[attr-defined]
-        stamp, points = decode_packets(state.sensor, stamps, payloads)
+        if state.packets is not None:  # kept at open
+            pair, points = _scan_decoder(state.sensor).decode(state.packets[k], True)
+            stamp = _stamp(pair)
+        else:
+            which = state.data[first : last + 1]
+            payloads = read_payloads(state.index, which)  # type: ignore[arg-type]
+            stamps = state.index.time[which].tolist()  # type: ignore[attr-defined]
+            stamp, points = decode_packets(state.sensor, stamps, payloads)
         if len(points) != n:
             raise FlicInputError(path, f"frame {k} decodes differently than when it was opened")
         return VelodyneScan(stamp, points, True, first, last)

@@ -5,7 +5,8 @@
 
 Each round runs one process per tree (this checkout's flic_cli and the other's, put first on
 PYTHONPATH), pinned to one core, that opens each recording, loads its frame once (warm-up) and
-then ``--repeat`` times, printing min / p10 / median ms. Alternating whole processes is how two
+then ``--repeat`` times, printing min / p10 / median ms of a load (and, in brackets, the
+minimum of ``--opens`` opens, ms). Alternating whole processes is how two
 versions of one module are compared here: on a loaded machine the minimum of each is the figure
 to compare, and the rounds show how much it moves.
 """
@@ -29,7 +30,11 @@ import flic_cli
 from flic_cli.io import open_dataset
 out = {"tree": flic_cli.__file__}
 for path, repeat in json.loads(sys.argv[1]):
-    ds = open_dataset(path)
+    opens = []
+    for _ in range(int(sys.argv[3])):
+        t = time.perf_counter()
+        ds = open_dataset(path)
+        opens.append(time.perf_counter() - t)
     ref = ds.refs()[0]
     ds.load(ref)
     ts = []
@@ -38,7 +43,7 @@ for path, repeat in json.loads(sys.argv[1]):
         ds.load(ref)
         ts.append(time.perf_counter() - t)
     out[path] = [round(1e3 * float(v), 3) for v in (np.min(ts), np.percentile(ts, 10),
-                                                    np.median(ts))]
+                                                    np.median(ts), np.min(opens))]
 print(json.dumps(out))
 """
 
@@ -54,6 +59,7 @@ def main() -> None:
     parser.add_argument("--rounds", type=int, default=3)
     parser.add_argument("--repeat", type=int, default=400, help="loads per recording (ASCII: /10)")
     parser.add_argument("--core", type=int, default=0)
+    parser.add_argument("--opens", type=int, default=5, help="opens per recording and round")
     parser.add_argument("--recordings", nargs="*", default=DEFAULT)
     args = parser.parse_args()
     jobs = [
@@ -64,12 +70,12 @@ def main() -> None:
         for tree in (args.other.resolve(), ROOT):
             env = {**os.environ, "PYTHONPATH": str(tree)}
             res = subprocess.run(
-                [sys.executable, "-c", CHILD, json.dumps(jobs), str(args.core)],
+                [sys.executable, "-c", CHILD, json.dumps(jobs), str(args.core), str(args.opens)],
                 env=env, cwd=tree, capture_output=True, text=True, check=True,
             )  # fmt: skip
             out = json.loads(res.stdout)
             cells = [
-                f"{Path(p).name[:24]} {v[0]:.3f} / {v[1]:.3f} / {v[2]:.3f}"
+                f"{Path(p).name[:24]} {v[0]:.3f} / {v[1]:.3f} / {v[2]:.3f} (open {v[3]:.1f})"
                 for p, v in out.items()
                 if p != "tree"
             ]
