@@ -100,6 +100,7 @@ gains the shared frames 0.02.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import TYPE_CHECKING, Annotated, ClassVar
 
 import numpy as np
@@ -178,126 +179,145 @@ def walk_tables(elevation: np.ndarray, width: int, reach: int) -> tuple[np.ndarr
     return cos_t, sin_t
 
 
-@njit(cache=True)
-def _walk_row(
-    r: int,
-    w: int,
-    on_w: np.ndarray,
-    nodes: np.ndarray,
-    raw: np.ndarray,
-    labels: np.ndarray,
-    parent: np.ndarray,
-    cos_t: np.ndarray,
-    sin_t: np.ndarray,
-    threshold: float,
-    sin_gamma: float,
-    k_row: int,
-    k_up: int,
-    walks: np.ndarray,
-    link_c: np.ndarray,
-    link_q: np.ndarray,
-    holed: np.ndarray,
-    fixed_side_gaps: bool,
-    above: np.ndarray,
-    below: np.ndarray,
-    level: LevelRule,
-) -> None:
-    """The walks of row ``r`` past their first steps (module docstring); every link found merges
-    two labels.
+def _walk_row_kernel(options: bool) -> Callable[..., None]:
+    """:func:`_walk_row` compiled with the tests of ``fixed_side_gaps`` and of the level rule
+    (``options``) or without them (the default graph).
 
-    ``on_w[di]``: packed flags of the nodes whose walk in direction ``di`` (left, up, up-left,
-    up-right) goes on past its first step. ``nodes``: the node ranges (0 elsewhere), ``raw``:
-    every range (a pixel outside the mask, e.g. ground, still shows free space), both flat.
-    The walks of one direction advance together, step by step, over a list of the walks still
-    going (``walks``); each step's tests are evaluated without a branch and the list is
-    compacted, so the only branches are the loops'. ``link_c``, ``link_q``: scratch for the links
-    (column of p, flat index of q). ``holed``: scratch, whether a walk with a sideways step
-    (left, up-left, up-right) has passed an open gap; with ``fixed_side_gaps`` such a walk links
-    only within ``threshold`` (module docstring, "Gaps beside"); ``above``, ``below``: the
-    ranges of the first node above and below every pixel (:func:`_column_neighbours`).
-    ``level``: the level-surface rule of the up walk (:func:`level_tables`, module docstring).
+    ``options`` is a constant of the compiled code, so the default walk carries none of the
+    options' loads, stores and selects: with them compiled in but off, Bridge took 10-13 % longer
+    per SemanticKITTI frame than before the options came (measured interleaved; see
+    results/benchmark/revisions/README.md).
     """
-    one = np.uint64(1)
-    level_on, sin_e, tan_e, spacing, level_tol, level_margin, level_cap, support = level
-    row = r * w
-    k_diag = min(k_up, k_row)
-    for di in range(4):
-        dr = 0 if di == 0 else -1
-        dc = -1 if di == 0 or di == 2 else (0 if di == 1 else 1)
-        kmax = k_row if di == 0 else (k_up if di == 1 else k_diag)
-        if kmax < 2:
-            continue
-        side = fixed_side_gaps & (di != 1)
-        lv_walk = level_on & (di == 1)
-        row_1 = (r + dr) * w
-        m = 0
-        for k in range(on_w.shape[1]):
-            bits = on_w[di, k]
-            while bits:
-                c = 64 * k + np.int64(trailing_zeros(bits))
-                walks[m] = c
-                c1 = c + dc
-                c1 += w if c1 < 0 else 0
-                c1 -= w if c1 >= w else 0
-                # the first step went on past an open gap (not a nearer node, not a hole in
-                # p's surface)
-                q1 = row_1 + c1
-                d1 = np.float64(nodes[row + c])
-                t1 = max(threshold, d1 * sin_gamma)
-                e1 = side and nodes[q1] <= 0.0
-                holed[m] = e1 and _open_gap(above, below, q1, d1, t1)
-                m += 1
-                bits &= bits - one
-        n_links = 0
-        for step in range(2, kmax + 1):
-            if m == 0:
-                break
-            cos_k = cos_t[di, r, step]
-            sin_k = sin_t[di, r, step]
-            row_q = (r + step * dr) * w
-            r_q = r + step * dr
-            se_p, se_q, te_q = sin_e[r], sin_e[r_q], tan_e[r_q]
-            sp_k = spacing[r, step] if lv_walk else 0.0
-            going = 0
-            for t in range(m):
-                c = walks[t]
-                h = holed[t]
-                d = np.float64(nodes[row + c])
-                t_far = max(threshold, d * sin_gamma)
-                tp = threshold if h else t_far
-                tp2 = tp * tp
-                c2 = c + step * dc
-                c2 += w if c2 < 0 else 0
-                c2 -= w if c2 >= w else 0
-                q = row_q + c2
-                dq = np.float64(nodes[q])
-                # the bound (nothing from here on can be linked), a link, free space beside p (a
-                # farther node, or a range beyond p outside the mask)
-                # (tp never grows along a walk; a level link is never longer than level_cap)
-                bound = d * sin_k >= (max(tp, level_cap) if lv_walk else tp)
-                linked = (dq > 0.0) & distance_edge(d, dq, cos_k, tp2)
-                if lv_walk:
-                    lv = (dq > 0.0) & _level_edge(
-                        d, dq, se_p, se_q, te_q, cos_k, sp_k, level_tol, level_margin, level_cap
-                    )
-                    if support and lv and not linked:  # (rare: only then look for support)
-                        lv = _supported_level(
-                            nodes, w, r, step, c, d, dq, cos_k, cos_t, sin_e, tan_e, spacing,
-                            level_tol, level_margin, level_cap, True,
-                        )  # fmt: skip
-                    linked |= lv
-                free = (dq > d) | ((dq <= 0.0) & (raw[q] > d))
-                link_c[n_links] = c
-                link_q[n_links] = q
-                n_links += np.int64(linked) * (1 - np.int64(bound))
-                walks[going] = c
-                e = side & (dq <= 0.0)
-                og = _open_gap(above, below, q, d, t_far) if e else False
-                holed[going] = h | og
-                going += 1 - np.int64(bound | linked | free)
-            m = going
-        for t in range(n_links):
-            union(parent, labels[row + link_c[t]], labels[link_q[t]])
+
+    @njit(cache=True)
+    def walk_row(
+        r: int,
+        w: int,
+        on_w: np.ndarray,
+        nodes: np.ndarray,
+        raw: np.ndarray,
+        labels: np.ndarray,
+        parent: np.ndarray,
+        cos_t: np.ndarray,
+        sin_t: np.ndarray,
+        threshold: float,
+        sin_gamma: float,
+        k_row: int,
+        k_up: int,
+        walks: np.ndarray,
+        link_c: np.ndarray,
+        link_q: np.ndarray,
+        holed: np.ndarray,
+        fixed_side_gaps: bool,
+        above: np.ndarray,
+        below: np.ndarray,
+        level: LevelRule,
+    ) -> None:
+        """The walks of row ``r`` past their first steps (module docstring); every link found
+        merges two labels.
+
+        ``on_w[di]``: packed flags of the nodes whose walk in direction ``di`` (left, up,
+        up-left, up-right) goes on past its first step. ``nodes``: the node ranges (0 elsewhere),
+        ``raw``: every range (a pixel outside the mask, e.g. ground, still shows free space),
+        both flat. The walks of one direction advance together, step by step, over a list of the
+        walks still going (``walks``); each step's tests are evaluated without a branch and the
+        list is compacted, so the only branches are the loops' (and the options', constant along
+        a walk). ``link_c``, ``link_q``: scratch for the links (column of p, flat index of q).
+        ``holed``: scratch, whether a walk with a sideways step (left, up-left, up-right) has
+        passed an open gap; with ``fixed_side_gaps`` such a walk links only within ``threshold``
+        (module docstring, "Gaps beside"); ``above``, ``below``: the ranges of the first node
+        above and below every pixel (:func:`_column_neighbours`). ``level``: the level-surface
+        rule of the up walk (:func:`level_tables`, module docstring). Without ``options``
+        (:func:`_walk_row_kernel`) ``fixed_side_gaps`` and ``level`` are not read.
+        """
+        one = np.uint64(1)
+        level_on, sin_e, tan_e, spacing, level_tol, level_margin, level_cap, support = level
+        row = r * w
+        k_diag = min(k_up, k_row)
+        for di in range(4):
+            dr = 0 if di == 0 else -1
+            dc = -1 if di == 0 or di == 2 else (0 if di == 1 else 1)
+            kmax = k_row if di == 0 else (k_up if di == 1 else k_diag)
+            if kmax < 2:
+                continue
+            side = options & fixed_side_gaps & (di != 1)
+            lv_walk = options & level_on & (di == 1)
+            row_1 = (r + dr) * w
+            m = 0
+            for k in range(on_w.shape[1]):
+                bits = on_w[di, k]
+                while bits:
+                    c = 64 * k + np.int64(trailing_zeros(bits))
+                    walks[m] = c
+                    c1 = c + dc
+                    c1 += w if c1 < 0 else 0
+                    c1 -= w if c1 >= w else 0
+                    # the first step went on past an open gap (not a nearer node, not a hole in
+                    # p's surface)
+                    q1 = row_1 + c1
+                    d1 = np.float64(nodes[row + c])
+                    t1 = max(threshold, d1 * sin_gamma)
+                    e1 = side and nodes[q1] <= 0.0
+                    holed[m] = e1 and _open_gap(above, below, q1, d1, t1)
+                    m += 1
+                    bits &= bits - one
+            n_links = 0
+            for step in range(2, kmax + 1):
+                if m == 0:
+                    break
+                cos_k = cos_t[di, r, step]
+                sin_k = sin_t[di, r, step]
+                row_q = (r + step * dr) * w
+                r_q = r + step * dr
+                se_p, se_q, te_q = sin_e[r], sin_e[r_q], tan_e[r_q]
+                sp_k = spacing[r, step] if lv_walk else 0.0
+                going = 0
+                for t in range(m):
+                    c = walks[t]
+                    h = holed[t] if side else False
+                    d = np.float64(nodes[row + c])
+                    t_far = max(threshold, d * sin_gamma)
+                    tp = threshold if h else t_far
+                    tp2 = tp * tp
+                    c2 = c + step * dc
+                    c2 += w if c2 < 0 else 0
+                    c2 -= w if c2 >= w else 0
+                    q = row_q + c2
+                    dq = np.float64(nodes[q])
+                    # the bound (nothing from here on can be linked), a link, free space beside p (a
+                    # farther node, or a range beyond p outside the mask)
+                    # (tp never grows along a walk; a level link is never longer than level_cap)
+                    bound = d * sin_k >= (max(tp, level_cap) if lv_walk else tp)
+                    linked = (dq > 0.0) & distance_edge(d, dq, cos_k, tp2)
+                    if lv_walk:
+                        lv = (dq > 0.0) & _level_edge(
+                            d, dq, se_p, se_q, te_q, cos_k, sp_k, level_tol, level_margin, level_cap
+                        )
+                        if support and lv and not linked:  # (rare: only then look for support)
+                            lv = _supported_level(
+                                nodes, w, r, step, c, d, dq, cos_k, cos_t, sin_e, tan_e, spacing,
+                                level_tol, level_margin, level_cap, True,
+                            )  # fmt: skip
+                        linked |= lv
+                    free = (dq > d) | ((dq <= 0.0) & (raw[q] > d))
+                    link_c[n_links] = c
+                    link_q[n_links] = q
+                    n_links += np.int64(linked) * (1 - np.int64(bound))
+                    walks[going] = c
+                    if side:
+                        og = (dq <= 0.0) and _open_gap(above, below, q, d, t_far)
+                        holed[going] = h | og
+                    going += 1 - np.int64(bound | linked | free)
+                m = going
+            for t in range(n_links):
+                union(parent, labels[row + link_c[t]], labels[link_q[t]])
+
+    return walk_row
+
+
+#: The walks past the first steps: the default graph, and with the options' tests.
+_walk_row_default = _walk_row_kernel(False)
+_walk_row = _walk_row_kernel(True)
 
 
 #: The level-surface rule as the kernel takes it: (on, sin and |tan| of the row elevations
@@ -609,6 +629,7 @@ def _bridge_components(
     one = np.uint64(1)
     k_row = min(reach, w - 1)
     n_labels = np.uint64(0)
+    options = fixed_side_gaps or level[0]
     # all rows first: the walks look up and down the column of a gap (a hole in a surface?)
     for r in range(h):
         _fill_nodes(nodes, rf, sf, use_skip, r * w, w)
@@ -709,10 +730,18 @@ def _bridge_components(
                     union(parent, labels[row + c], labels[j])
         pack(left_on[: 64 * nw], on_w[0])
         pack(up_on[: 64 * nw], on_w[1])
-        _walk_row(
-            r, w, on_w, nodes, rf, labels, parent, cos_t, sin_t, threshold, sin_gamma, k_row,
-            k_up, walks, link_c, link_q, holed, fixed_side_gaps, col_above, col_below, level,
-        )  # fmt: skip
+        if options:
+            _walk_row(
+                r, w, on_w, nodes, rf, labels, parent, cos_t, sin_t, threshold, sin_gamma,
+                k_row, k_up, walks, link_c, link_q, holed, fixed_side_gaps, col_above, col_below,
+                level,
+            )  # fmt: skip
+        else:
+            _walk_row_default(
+                r, w, on_w, nodes, rf, labels, parent, cos_t, sin_t, threshold, sin_gamma,
+                k_row, k_up, walks, link_c, link_q, holed, fixed_side_gaps, col_above, col_below,
+                level,
+            )  # fmt: skip
     attach(labels, size, attached)
     return labels[:n], number(parent, size, np.int64(n_labels), min_size)
 
