@@ -22,8 +22,9 @@ the top row (``K <= r`` upwards) and less than a full turn (``K <= W - 1`` sidew
 
 - ``q_k`` is no node: if it holds a range (a pixel left out by ``mask``, e.g. ground) farther than
   ``d_p``, stop (free space, see below), else go on (a hole);
-- ``|p - q_k| < t_p`` (3D distance, the law of cosines with the true angle between the two rays):
-  **edge p -- q_k**, stop;
+- ``|p - q_k| < t_p`` (3D distance, the law of cosines with the true angle between the two rays,
+  each at its row's elevation and its own azimuth: the column's centre plus the row's azimuth
+  offset, :attr:`flic_cli.range_image.RangeImage.azimuth_offset`): **edge p -- q_k**, stop;
 - else ``d_q > d_p``: stop. The ray through ``q_k`` passed the depth of ``p`` without hitting
   anything, so the scan *sees free space* beside ``p`` in that direction: the gap between two
   people or between a car and the wall behind it is not jumped;
@@ -35,10 +36,11 @@ through the adjacent ones), it also walks up-left ``(-1, -1)`` and up-right ``(-
 measurement has at most four edges. The clusters are the connected components; those with fewer
 than ``min_size`` points (a pixel counts the points that fell into it) are dropped.
 
-A walk also ends as soon as ``d_p sin(alpha_k) >= t_p``, with ``alpha_k`` the angle between the rays
-of ``p`` and ``q_k``: every point of that ray is at least ``d_p sin(alpha_k)`` from ``p``, and
-``alpha_k`` grows with ``k``, so nothing further on could be linked. This bound changes no edge; it
-only keeps the walks short (the window shrinks with the range: at 20 m and 2048 columns a
+A walk also ends as soon as ``d_p sin(alpha_j) >= t_p`` for every ``j >= k``, with ``alpha_j`` the
+angle between the rays of ``p`` and ``q_j``: every point of such a ray is at least
+``d_p sin(alpha_j)`` from ``p`` (``alpha_j`` mostly grows with ``j``, but need not with azimuth
+offsets), so nothing further on could be linked. This bound changes no edge; it only keeps the
+walks short (the window shrinks with the range: at 20 m and 2048 columns a
 horizontal walk ends after 11 columns).
 
 With ``reach_px = 1`` and ``gamma_deg = 0`` the graph is FLIC without Map Connections plus the
@@ -111,6 +113,7 @@ from pydantic.dataclasses import dataclass
 from flic_cli.bitwords import pack, trailing_zeros
 from flic_cli.component import STRICT
 from flic_cli.methods.base import ground_parts, point_weights
+from flic_cli.methods.connections import offset_input
 from flic_cli.methods.criteria import distance_edge
 from flic_cli.methods.engine import (
     attach,
@@ -136,11 +139,22 @@ DIRECTIONS: tuple[tuple[int, int], ...] = ((0, -1), (-1, 0), (-1, -1), (-1, 1))
 
 @njit(cache=True)
 def walk_tables(elevation: np.ndarray, width: int, reach: int) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`walk_tables_offset` without azimuth offsets (every ray at its column's centre)."""
+    return walk_tables_offset(elevation, np.zeros(elevation.size), width, reach)
+
+
+@njit(cache=True)
+def walk_tables_offset(
+    elevation: np.ndarray, azimuth_offset: np.ndarray, width: int, reach: int
+) -> tuple[np.ndarray, np.ndarray]:
     """cos and sin of the angle between the ray of (r, c) and the ray k steps away.
 
     Parameters
     ----------
     elevation : (H,) row elevations, radians.
+    azimuth_offset : (H,) azimuth offset of every row, radians (a pixel's azimuth is its
+        column's centre plus it, :attr:`flic_cli.range_image.RangeImage.azimuth_offset`): the
+        angle is that between the two pixels' true directions.
     width : W, columns over 360 deg.
     reach : largest step k.
 
@@ -150,30 +164,43 @@ def walk_tables(elevation: np.ndarray, width: int, reach: int) -> tuple[np.ndarr
     sin : (4, H, reach + 1) float64, the walk's bound: the smallest ``sin(alpha)`` (1 from
         90 deg on) of this and every later step, so that ``d_p * sin[k] >= t_p`` means no step
         from k on can be linked. Steps that leave the image (above row 0) get cos 1, sin 2.
+
+    Notes
+    -----
+    The cosine is the dot product of the unit vectors ``(cos e cos a, cos e sin a, sin e)``,
+    ``cos e_p cos e_q cos(a_q - a_p) + sin e_p sin e_q``. The azimuth falls by ``2 pi / W`` per
+    column, so ``q`` k steps of ``dc`` columns from ``p`` has ``a_q - a_p = -k dc 2 pi / W +
+    offset_q - offset_p``; where the two rows' offsets are equal (always without offsets) its
+    cosine is taken as before the offsets came (``cos(k |dc| 2 pi / W)``), so that no edge of
+    such an image changes.
     """
     h = elevation.size
     cos_t = np.ones((4, h, reach + 1))
     sin_t = np.full((4, h, reach + 1), 2.0)
     ce = np.cos(elevation)
     se = np.sin(elevation)
-    ck = np.cos(np.arange(reach + 1) * (2.0 * np.pi / width))
+    h_step = 2.0 * np.pi / width
+    ck = np.cos(np.arange(reach + 1) * h_step)
     for di in range(4):
         dr = DIRECTIONS[di][0]
-        adc = abs(DIRECTIONS[di][1])
+        dc = DIRECTIONS[di][1]
+        adc = abs(dc)
         for r in range(h):
             for k in range(1, reach + 1):
                 r2 = r + k * dr
                 if r2 < 0:
                     break
+                off = azimuth_offset[r2] - azimuth_offset[r]
+                ca = ck[k * adc] if off == 0.0 else np.cos(off - k * dc * h_step)
                 # unit vectors (cos e cos a, cos e sin a, sin e): their dot product
-                c = ce[r] * ce[r2] * ck[k * adc] + se[r] * se[r2]
+                c = ce[r] * ce[r2] * ca + se[r] * se[r2]
                 c = min(1.0, max(-1.0, c))
                 cos_t[di, r, k] = c
                 # every point of a ray at angle alpha from p's ray is at least d_p sin(alpha)
                 # from p, or d_p once alpha >= 90 deg
                 sin_t[di, r, k] = np.sqrt(1.0 - c * c) if c > 0.0 else 1.0
             # a walk may stop at k only if no later step can link either: suffix minimum (the
-            # angle shrinks again past 180 deg on very narrow images)
+            # angle need not grow with k: offsets, or past 180 deg on very narrow images)
             for k in range(reach - 1, 0, -1):
                 sin_t[di, r, k] = min(sin_t[di, r, k], sin_t[di, r, k + 1])
     return cos_t, sin_t
@@ -746,20 +773,23 @@ def _bridge_components(
     return labels[:n], number(parent, size, np.int64(n_labels), min_size)
 
 
-#: (elevation bytes, width, reach) -> walk_tables; cleared when full
+#: (elevation bytes, azimuth offset bytes, width, reach) -> walk_tables_offset; cleared when
+#: full
 _TABLES: dict[tuple, tuple[np.ndarray, np.ndarray]] = {}
 
 
 def cached_walk_tables(
-    elevation: np.ndarray, width: int, reach: int
+    elevation: np.ndarray, width: int, reach: int, azimuth_offset: np.ndarray | None = None
 ) -> tuple[np.ndarray, np.ndarray]:
-    """:func:`walk_tables`, computed once per elevation, width and reach."""
-    key = (elevation.tobytes(), width, reach)
+    """:func:`walk_tables_offset`, computed once per elevation, azimuth offsets (None: zeros),
+    width and reach."""
+    offset = offset_input(azimuth_offset, elevation.size)
+    key = (elevation.tobytes(), offset.tobytes(), width, reach)
     out = _TABLES.get(key)
     if out is None:
         if len(_TABLES) >= 64:
             _TABLES.clear()
-        out = _TABLES[key] = walk_tables(elevation, width, reach)
+        out = _TABLES[key] = walk_tables_offset(elevation, offset, width, reach)
     return out
 
 
@@ -808,17 +838,18 @@ def run_bridge(
     level_margin: float = 1.5,
     level_cap_m: float = 2.0,
     level_supported: bool = False,
+    azimuth_offset: np.ndarray | None = None,
 ) -> np.ndarray:
     """Bridge labels per pixel, or per point given ``point_pixel`` (see :func:`bridge_labels`;
     ``skip``: pixels left out even with a range, e.g. ground; ``attached``: held pixels, see
     :func:`flic_cli.methods.connections.components`; ``level_tolerance`` > 0 turns the
-    level-surface rule on)."""
+    level-surface rule on; ``azimuth_offset``: (H,) of every row, radians, None = zeros)."""
     if reach_px < 1:
         raise ValueError(f"reach_px must be >= 1, got {reach_px}")
     ranges, elevation, skip, use_skip, weights, use_weights = kernel_inputs(
         ranges, elevation, skip, weights
     )
-    cos_t, sin_t = cached_walk_tables(elevation, ranges.shape[1], int(reach_px))
+    cos_t, sin_t = cached_walk_tables(elevation, ranges.shape[1], int(reach_px), azimuth_offset)
     level_on = level_tolerance > 0
     spacing = cached_level_tables(elevation, int(reach_px)) if level_on else np.zeros((1, 1))
     level = (
@@ -902,6 +933,7 @@ class Bridge:
             self.level_margin,
             self.level_cap_m,
             self.level_supported,
+            image.azimuth_offset if image.has_azimuth_offset else None,
         )
 
 
@@ -919,6 +951,7 @@ def bridge_labels(
     level_margin: float = Bridge.level_margin,
     level_cap_m: float = Bridge.level_cap_m,
     level_supported: bool = Bridge.level_supported,
+    azimuth_offset: np.ndarray | None = None,
 ) -> np.ndarray:
     """Bridge cluster labels of a range image (the graph is defined in the module docstring).
 
@@ -938,6 +971,9 @@ def bridge_labels(
     level_tolerance, level_margin, level_cap_m : the level-surface link of the up walk (module
         docstring, "Level surfaces"; ``level_tolerance`` 0 = off), -, -, metres.
     level_supported : level links only where a third node continues the level surface.
+    azimuth_offset : (H,) azimuth offset of every row, radians (a pixel's azimuth is its
+        column's centre plus it; :attr:`flic_cli.range_image.RangeImage.azimuth_offset`);
+        None = zeros.
 
     Returns
     -------
@@ -947,4 +983,5 @@ def bridge_labels(
     return run_bridge(
         ranges, elevation, threshold_m, gamma_deg, reach_px, min_size, skip, weights, None, None,
         fixed_side_gaps, level_tolerance, level_margin, level_cap_m, level_supported,
+        azimuth_offset,
     )  # fmt: skip
