@@ -933,7 +933,7 @@ class Bridge:
             self.level_margin,
             self.level_cap_m,
             self.level_supported,
-            image.azimuth_offset if image.has_azimuth_offset else None,
+            image.azimuth_offset,
         )
 
 
