@@ -90,16 +90,21 @@ def lab(semantic: int, instance: int = 0) -> int:
     return (instance << 16) | semantic
 
 
-def xyz_of(ranges: np.ndarray, elevation: np.ndarray) -> np.ndarray:
+def xyz_of(
+    ranges: np.ndarray, elevation: np.ndarray, azimuth_offset: np.ndarray | None = None
+) -> np.ndarray:
     """(H, W, 3) float64 points in m from the angles of the image convention.
 
     ``r cos(el) cos(az), r cos(el) sin(az), r sin(el)`` with each row's elevation and each
-    column's azimuth as a native-projection :class:`RangeImage` of that width has them; no law of
-    cosines, none of flic's point code.
+    column's azimuth as a native-projection :class:`RangeImage` of that width has them, plus the
+    row's ``azimuth_offset`` (radians, None = zeros); no law of cosines, none of flic's point
+    code.
     """
     img = RangeImage(ranges.astype(np.float32), elevation, np.zeros(0, np.int64), "native")
     el = img.elevation[:, None]
     az = img.azimuth[None, :]
+    if azimuth_offset is not None:
+        az = az + np.asarray(azimuth_offset, dtype=np.float64)[:, None]
     r = ranges.astype(np.float64)
     return np.stack(
         [r * np.cos(el) * np.cos(az), r * np.cos(el) * np.sin(az), r * np.sin(el) + 0 * az], -1

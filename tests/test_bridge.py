@@ -10,7 +10,7 @@ from hypothesis import strategies as st
 from oracles import image_components, surface_scenes, xyz_of
 
 from flic_cli.methods import Bridge, bridge_labels, flic_labels
-from flic_cli.range_image import RangeImage
+from flic_cli.range_image import RangeImage, from_sensor_image
 
 LEFT, UP = (0, -1), (-1, 0)
 DIAGONALS = ((-1, -1), (-1, 1))
@@ -52,17 +52,26 @@ def level_pair(pts, elevation, a, b, level, margins):
 
 
 def bridge_graph(
-    ranges, elevation, mask, threshold, gamma_deg, reach, fixed_side_gaps=True, level=None
+    ranges,
+    elevation,
+    mask,
+    threshold,
+    gamma_deg,
+    reach,
+    fixed_side_gaps=True,
+    level=None,
+    azimuth_offset=None,
 ):
     """Edges of the Bridge graph, walked exactly as the module docstring says; ``level``:
-    (tolerance, margin, cap, supported only) of the level rule of the up walk, or None (off).
+    (tolerance, margin, cap, supported only) of the level rule of the up walk, or None (off);
+    ``azimuth_offset``: (H,) of every row, radians (the 3D points from the true directions).
 
     Returns the edges and, for every distance test made, ``distance - t_p`` (to stay away from
     ties between float32 ranges and float64 coordinates) and, for every gap test, the smallest
     ``|range difference| - t_p`` over the column.
     """
     h, w = ranges.shape
-    pts = xyz_of(ranges, elevation)
+    pts = xyz_of(ranges, elevation, azimuth_offset)
     node = mask & (ranges > 0)
     edges, margins = [], []
     for r in range(h):
@@ -147,6 +156,66 @@ def test_bridge_equals_components_of_its_graph(
         ranges, elevation, threshold, gamma, reach, min_size, mask, weights, fixed, *lv
     )
     np.testing.assert_array_equal(got, expected)
+
+
+@st.composite
+def offset_scenes(draw):
+    """:func:`oracles.surface_scenes` with an azimuth offset per row (Ouster's
+    ``beam_azimuth_angles``) of up to 3 columns either way, radians."""
+    ranges, elevation, mask, weights = draw(surface_scenes())
+    h, w = ranges.shape
+    rng = np.random.default_rng(draw(st.integers(0, 2**32 - 1)))
+    offset = rng.uniform(-3.0, 3.0, h) * (2.0 * np.pi / w)
+    return ranges, elevation, mask, weights, offset
+
+
+@settings(max_examples=300, deadline=None)
+@given(
+    scene=offset_scenes(),
+    threshold=st.floats(0.2, 3.0),
+    gamma=st.sampled_from([0.0, 1.0, 2.0, 5.0]),
+    reach=st.integers(1, 20),
+    min_size=st.integers(1, 10),
+    fixed=st.booleans(),
+    level=st.one_of(
+        st.none(),
+        st.tuples(st.floats(0.05, 1.0), st.floats(0.5, 3.0), st.floats(0.3, 6.0), st.booleans()),
+    ),
+)
+def test_bridge_with_azimuth_offsets_equals_components_of_its_true_3d_graph(
+    scene, threshold, gamma, reach, min_size, fixed, level
+):
+    # the graph's distances from the 3D points of each pixel's true direction (its row's
+    # elevation, its column's centre plus its row's azimuth offset)
+    ranges, elevation, mask, weights, offset = scene
+    edges, margins = bridge_graph(
+        ranges, elevation, mask, threshold, gamma, reach, fixed, level, offset
+    )
+    assume(all(abs(m) > 1e-4 for m in margins))
+    node = mask & (ranges > 0)
+    expected = image_components(ranges.shape, node, edges, min_size, weights)
+    lv = level or (0.0, 1.5, 2.0, False)
+    got = bridge_labels(
+        ranges, elevation, threshold, gamma, reach, min_size, mask, weights, fixed, *lv, offset
+    )
+    np.testing.assert_array_equal(got, expected)
+
+
+@settings(max_examples=100, deadline=None)
+@given(scene=offset_scenes(), threshold=st.floats(0.2, 3.0), reach=st.integers(1, 20))
+def test_bridge_reads_the_azimuth_offsets_from_the_image(scene, threshold, reach):
+    # a sensor image (one point per valid pixel) carries the offsets; Bridge's labels per point
+    # are the true 3D graph's
+    ranges, elevation, _, _, offset = scene
+    everything = np.ones(ranges.shape, bool)
+    edges, margins = bridge_graph(
+        ranges, elevation, everything, threshold, 2.0, reach, False, None, offset
+    )
+    assume(all(abs(m) > 1e-4 for m in margins))
+    expected = image_components(ranges.shape, ranges > 0, edges, 1, np.ones(ranges.shape))
+    img = from_sensor_image(ranges, elevation, offset)
+    got = Bridge(threshold, 2.0, reach, 1).segment(img, img.to_points()[img.point_pixel], None)
+    np.testing.assert_array_equal(got, expected.reshape(-1)[img.point_pixel])
 
 
 @settings(max_examples=300, deadline=None)

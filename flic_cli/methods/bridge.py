@@ -22,8 +22,9 @@ the top row (``K <= r`` upwards) and less than a full turn (``K <= W - 1`` sidew
 
 - ``q_k`` is no node: if it holds a range (a pixel left out by ``mask``, e.g. ground) farther than
   ``d_p``, stop (free space, see below), else go on (a hole);
-- ``|p - q_k| < t_p`` (3D distance, the law of cosines with the true angle between the two rays):
-  **edge p -- q_k**, stop;
+- ``|p - q_k| < t_p`` (3D distance, the law of cosines with the true angle between the two rays,
+  each at its row's elevation and its own azimuth: the column's centre plus the row's azimuth
+  offset, :attr:`flic_cli.range_image.RangeImage.azimuth_offset`): **edge p -- q_k**, stop;
 - else ``d_q > d_p``: stop. The ray through ``q_k`` passed the depth of ``p`` without hitting
   anything, so the scan *sees free space* beside ``p`` in that direction: the gap between two
   people or between a car and the wall behind it is not jumped;
@@ -35,10 +36,11 @@ through the adjacent ones), it also walks up-left ``(-1, -1)`` and up-right ``(-
 measurement has at most four edges. The clusters are the connected components; those with fewer
 than ``min_size`` points (a pixel counts the points that fell into it) are dropped.
 
-A walk also ends as soon as ``d_p sin(alpha_k) >= t_p``, with ``alpha_k`` the angle between the rays
-of ``p`` and ``q_k``: every point of that ray is at least ``d_p sin(alpha_k)`` from ``p``, and
-``alpha_k`` grows with ``k``, so nothing further on could be linked. This bound changes no edge; it
-only keeps the walks short (the window shrinks with the range: at 20 m and 2048 columns a
+A walk also ends as soon as ``d_p sin(alpha_j) >= t_p`` for every ``j >= k``, with ``alpha_j`` the
+angle between the rays of ``p`` and ``q_j``: every point of such a ray is at least
+``d_p sin(alpha_j)`` from ``p`` (``alpha_j`` mostly grows with ``j``, but need not with azimuth
+offsets), so nothing further on could be linked. This bound changes no edge; it only keeps the
+walks short (the window shrinks with the range: at 20 m and 2048 columns a
 horizontal walk ends after 11 columns).
 
 With ``reach_px = 1`` and ``gamma_deg = 0`` the graph is FLIC without Map Connections plus the
@@ -100,6 +102,7 @@ gains the shared frames 0.02.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import TYPE_CHECKING, Annotated, ClassVar
 
 import numpy as np
@@ -110,6 +113,7 @@ from pydantic.dataclasses import dataclass
 from flic_cli.bitwords import pack, trailing_zeros
 from flic_cli.component import STRICT
 from flic_cli.methods.base import ground_parts, point_weights
+from flic_cli.methods.connections import offset_input
 from flic_cli.methods.criteria import distance_edge
 from flic_cli.methods.engine import (
     attach,
@@ -135,11 +139,22 @@ DIRECTIONS: tuple[tuple[int, int], ...] = ((0, -1), (-1, 0), (-1, -1), (-1, 1))
 
 @njit(cache=True)
 def walk_tables(elevation: np.ndarray, width: int, reach: int) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`walk_tables_offset` without azimuth offsets (every ray at its column's centre)."""
+    return walk_tables_offset(elevation, np.zeros(elevation.size), width, reach)
+
+
+@njit(cache=True)
+def walk_tables_offset(
+    elevation: np.ndarray, azimuth_offset: np.ndarray, width: int, reach: int
+) -> tuple[np.ndarray, np.ndarray]:
     """cos and sin of the angle between the ray of (r, c) and the ray k steps away.
 
     Parameters
     ----------
     elevation : (H,) row elevations, radians.
+    azimuth_offset : (H,) azimuth offset of every row, radians (a pixel's azimuth is its
+        column's centre plus it, :attr:`flic_cli.range_image.RangeImage.azimuth_offset`): the
+        angle is that between the two pixels' true directions.
     width : W, columns over 360 deg.
     reach : largest step k.
 
@@ -149,155 +164,187 @@ def walk_tables(elevation: np.ndarray, width: int, reach: int) -> tuple[np.ndarr
     sin : (4, H, reach + 1) float64, the walk's bound: the smallest ``sin(alpha)`` (1 from
         90 deg on) of this and every later step, so that ``d_p * sin[k] >= t_p`` means no step
         from k on can be linked. Steps that leave the image (above row 0) get cos 1, sin 2.
+
+    Notes
+    -----
+    The cosine is the dot product of the unit vectors ``(cos e cos a, cos e sin a, sin e)``,
+    ``cos e_p cos e_q cos(a_q - a_p) + sin e_p sin e_q``. The azimuth falls by ``2 pi / W`` per
+    column, so ``q`` k steps of ``dc`` columns from ``p`` has ``a_q - a_p = -k dc 2 pi / W +
+    offset_q - offset_p``; where the two rows' offsets are equal (always without offsets) its
+    cosine is taken as before the offsets came (``cos(k |dc| 2 pi / W)``), so that no edge of
+    such an image changes.
     """
     h = elevation.size
     cos_t = np.ones((4, h, reach + 1))
     sin_t = np.full((4, h, reach + 1), 2.0)
     ce = np.cos(elevation)
     se = np.sin(elevation)
-    ck = np.cos(np.arange(reach + 1) * (2.0 * np.pi / width))
+    h_step = 2.0 * np.pi / width
+    ck = np.cos(np.arange(reach + 1) * h_step)
     for di in range(4):
         dr = DIRECTIONS[di][0]
-        adc = abs(DIRECTIONS[di][1])
+        dc = DIRECTIONS[di][1]
+        adc = abs(dc)
         for r in range(h):
             for k in range(1, reach + 1):
                 r2 = r + k * dr
                 if r2 < 0:
                     break
+                off = azimuth_offset[r2] - azimuth_offset[r]
+                ca = ck[k * adc] if off == 0.0 else np.cos(off - k * dc * h_step)
                 # unit vectors (cos e cos a, cos e sin a, sin e): their dot product
-                c = ce[r] * ce[r2] * ck[k * adc] + se[r] * se[r2]
+                c = ce[r] * ce[r2] * ca + se[r] * se[r2]
                 c = min(1.0, max(-1.0, c))
                 cos_t[di, r, k] = c
                 # every point of a ray at angle alpha from p's ray is at least d_p sin(alpha)
                 # from p, or d_p once alpha >= 90 deg
                 sin_t[di, r, k] = np.sqrt(1.0 - c * c) if c > 0.0 else 1.0
             # a walk may stop at k only if no later step can link either: suffix minimum (the
-            # angle shrinks again past 180 deg on very narrow images)
+            # angle need not grow with k: offsets, or past 180 deg on very narrow images)
             for k in range(reach - 1, 0, -1):
                 sin_t[di, r, k] = min(sin_t[di, r, k], sin_t[di, r, k + 1])
     return cos_t, sin_t
 
 
-@njit(cache=True)
-def _walk_row(
-    r: int,
-    w: int,
-    on_w: np.ndarray,
-    nodes: np.ndarray,
-    raw: np.ndarray,
-    labels: np.ndarray,
-    parent: np.ndarray,
-    cos_t: np.ndarray,
-    sin_t: np.ndarray,
-    threshold: float,
-    sin_gamma: float,
-    k_row: int,
-    k_up: int,
-    walks: np.ndarray,
-    link_c: np.ndarray,
-    link_q: np.ndarray,
-    holed: np.ndarray,
-    fixed_side_gaps: bool,
-    above: np.ndarray,
-    below: np.ndarray,
-    level: LevelRule,
-) -> None:
-    """The walks of row ``r`` past their first steps (module docstring); every link found merges
-    two labels.
+def _walk_row_kernel(options: bool) -> Callable[..., None]:
+    """:func:`_walk_row` compiled with the tests of ``fixed_side_gaps`` and of the level rule
+    (``options``) or without them (the default graph).
 
-    ``on_w[di]``: packed flags of the nodes whose walk in direction ``di`` (left, up, up-left,
-    up-right) goes on past its first step. ``nodes``: the node ranges (0 elsewhere), ``raw``:
-    every range (a pixel outside the mask, e.g. ground, still shows free space), both flat.
-    The walks of one direction advance together, step by step, over a list of the walks still
-    going (``walks``); each step's tests are evaluated without a branch and the list is
-    compacted, so the only branches are the loops'. ``link_c``, ``link_q``: scratch for the links
-    (column of p, flat index of q). ``holed``: scratch, whether a walk with a sideways step
-    (left, up-left, up-right) has passed an open gap; with ``fixed_side_gaps`` such a walk links
-    only within ``threshold`` (module docstring, "Gaps beside"); ``above``, ``below``: the
-    ranges of the first node above and below every pixel (:func:`_column_neighbours`).
-    ``level``: the level-surface rule of the up walk (:func:`level_tables`, module docstring).
+    ``options`` is a constant of the compiled code, so the default walk carries none of the
+    options' loads, stores and selects: with them compiled in but off, Bridge took 10-13 % longer
+    per SemanticKITTI frame than before the options came (measured interleaved; see
+    results/benchmark/revisions/README.md).
     """
-    one = np.uint64(1)
-    level_on, sin_e, tan_e, spacing, level_tol, level_margin, level_cap, support = level
-    row = r * w
-    k_diag = min(k_up, k_row)
-    for di in range(4):
-        dr = 0 if di == 0 else -1
-        dc = -1 if di == 0 or di == 2 else (0 if di == 1 else 1)
-        kmax = k_row if di == 0 else (k_up if di == 1 else k_diag)
-        if kmax < 2:
-            continue
-        side = fixed_side_gaps & (di != 1)
-        lv_walk = level_on & (di == 1)
-        row_1 = (r + dr) * w
-        m = 0
-        for k in range(on_w.shape[1]):
-            bits = on_w[di, k]
-            while bits:
-                c = 64 * k + np.int64(trailing_zeros(bits))
-                walks[m] = c
-                c1 = c + dc
-                c1 += w if c1 < 0 else 0
-                c1 -= w if c1 >= w else 0
-                # the first step went on past an open gap (not a nearer node, not a hole in
-                # p's surface)
-                q1 = row_1 + c1
-                d1 = np.float64(nodes[row + c])
-                t1 = max(threshold, d1 * sin_gamma)
-                e1 = side and nodes[q1] <= 0.0
-                holed[m] = e1 and _open_gap(above, below, q1, d1, t1)
-                m += 1
-                bits &= bits - one
-        n_links = 0
-        for step in range(2, kmax + 1):
-            if m == 0:
-                break
-            cos_k = cos_t[di, r, step]
-            sin_k = sin_t[di, r, step]
-            row_q = (r + step * dr) * w
-            r_q = r + step * dr
-            se_p, se_q, te_q = sin_e[r], sin_e[r_q], tan_e[r_q]
-            sp_k = spacing[r, step] if lv_walk else 0.0
-            going = 0
-            for t in range(m):
-                c = walks[t]
-                h = holed[t]
-                d = np.float64(nodes[row + c])
-                t_far = max(threshold, d * sin_gamma)
-                tp = threshold if h else t_far
-                tp2 = tp * tp
-                c2 = c + step * dc
-                c2 += w if c2 < 0 else 0
-                c2 -= w if c2 >= w else 0
-                q = row_q + c2
-                dq = np.float64(nodes[q])
-                # the bound (nothing from here on can be linked), a link, free space beside p (a
-                # farther node, or a range beyond p outside the mask)
-                # (tp never grows along a walk; a level link is never longer than level_cap)
-                bound = d * sin_k >= (max(tp, level_cap) if lv_walk else tp)
-                linked = (dq > 0.0) & distance_edge(d, dq, cos_k, tp2)
-                if lv_walk:
-                    lv = (dq > 0.0) & _level_edge(
-                        d, dq, se_p, se_q, te_q, cos_k, sp_k, level_tol, level_margin, level_cap
-                    )
-                    if support and lv and not linked:  # (rare: only then look for support)
-                        lv = _supported_level(
-                            nodes, w, r, step, c, d, dq, cos_k, cos_t, sin_e, tan_e, spacing,
-                            level_tol, level_margin, level_cap, True,
-                        )  # fmt: skip
-                    linked |= lv
-                free = (dq > d) | ((dq <= 0.0) & (raw[q] > d))
-                link_c[n_links] = c
-                link_q[n_links] = q
-                n_links += np.int64(linked) * (1 - np.int64(bound))
-                walks[going] = c
-                e = side & (dq <= 0.0)
-                og = _open_gap(above, below, q, d, t_far) if e else False
-                holed[going] = h | og
-                going += 1 - np.int64(bound | linked | free)
-            m = going
-        for t in range(n_links):
-            union(parent, labels[row + link_c[t]], labels[link_q[t]])
+
+    @njit(cache=True)
+    def walk_row(
+        r: int,
+        w: int,
+        on_w: np.ndarray,
+        nodes: np.ndarray,
+        raw: np.ndarray,
+        labels: np.ndarray,
+        parent: np.ndarray,
+        cos_t: np.ndarray,
+        sin_t: np.ndarray,
+        threshold: float,
+        sin_gamma: float,
+        k_row: int,
+        k_up: int,
+        walks: np.ndarray,
+        link_c: np.ndarray,
+        link_q: np.ndarray,
+        holed: np.ndarray,
+        fixed_side_gaps: bool,
+        above: np.ndarray,
+        below: np.ndarray,
+        level: LevelRule,
+    ) -> None:
+        """The walks of row ``r`` past their first steps (module docstring); every link found
+        merges two labels.
+
+        ``on_w[di]``: packed flags of the nodes whose walk in direction ``di`` (left, up,
+        up-left, up-right) goes on past its first step. ``nodes``: the node ranges (0 elsewhere),
+        ``raw``: every range (a pixel outside the mask, e.g. ground, still shows free space),
+        both flat. The walks of one direction advance together, step by step, over a list of the
+        walks still going (``walks``); each step's tests are evaluated without a branch and the
+        list is compacted, so the only branches are the loops' (and the options', constant along
+        a walk). ``link_c``, ``link_q``: scratch for the links (column of p, flat index of q).
+        ``holed``: scratch, whether a walk with a sideways step (left, up-left, up-right) has
+        passed an open gap; with ``fixed_side_gaps`` such a walk links only within ``threshold``
+        (module docstring, "Gaps beside"); ``above``, ``below``: the ranges of the first node
+        above and below every pixel (:func:`_column_neighbours`). ``level``: the level-surface
+        rule of the up walk (:func:`level_tables`, module docstring). Without ``options``
+        (:func:`_walk_row_kernel`) ``fixed_side_gaps`` and ``level`` are not read.
+        """
+        one = np.uint64(1)
+        level_on, sin_e, tan_e, spacing, level_tol, level_margin, level_cap, support = level
+        row = r * w
+        k_diag = min(k_up, k_row)
+        for di in range(4):
+            dr = 0 if di == 0 else -1
+            dc = -1 if di == 0 or di == 2 else (0 if di == 1 else 1)
+            kmax = k_row if di == 0 else (k_up if di == 1 else k_diag)
+            if kmax < 2:
+                continue
+            side = options & fixed_side_gaps & (di != 1)
+            lv_walk = options & level_on & (di == 1)
+            row_1 = (r + dr) * w
+            m = 0
+            for k in range(on_w.shape[1]):
+                bits = on_w[di, k]
+                while bits:
+                    c = 64 * k + np.int64(trailing_zeros(bits))
+                    walks[m] = c
+                    c1 = c + dc
+                    c1 += w if c1 < 0 else 0
+                    c1 -= w if c1 >= w else 0
+                    # the first step went on past an open gap (not a nearer node, not a hole in
+                    # p's surface)
+                    q1 = row_1 + c1
+                    d1 = np.float64(nodes[row + c])
+                    t1 = max(threshold, d1 * sin_gamma)
+                    e1 = side and nodes[q1] <= 0.0
+                    holed[m] = e1 and _open_gap(above, below, q1, d1, t1)
+                    m += 1
+                    bits &= bits - one
+            n_links = 0
+            for step in range(2, kmax + 1):
+                if m == 0:
+                    break
+                cos_k = cos_t[di, r, step]
+                sin_k = sin_t[di, r, step]
+                row_q = (r + step * dr) * w
+                r_q = r + step * dr
+                se_p, se_q, te_q = sin_e[r], sin_e[r_q], tan_e[r_q]
+                sp_k = spacing[r, step] if lv_walk else 0.0
+                going = 0
+                for t in range(m):
+                    c = walks[t]
+                    h = holed[t] if side else False
+                    d = np.float64(nodes[row + c])
+                    t_far = max(threshold, d * sin_gamma)
+                    tp = threshold if h else t_far
+                    tp2 = tp * tp
+                    c2 = c + step * dc
+                    c2 += w if c2 < 0 else 0
+                    c2 -= w if c2 >= w else 0
+                    q = row_q + c2
+                    dq = np.float64(nodes[q])
+                    # the bound (nothing from here on can be linked), a link, free space beside p (a
+                    # farther node, or a range beyond p outside the mask)
+                    # (tp never grows along a walk; a level link is never longer than level_cap)
+                    bound = d * sin_k >= (max(tp, level_cap) if lv_walk else tp)
+                    linked = (dq > 0.0) & distance_edge(d, dq, cos_k, tp2)
+                    if lv_walk:
+                        lv = (dq > 0.0) & _level_edge(
+                            d, dq, se_p, se_q, te_q, cos_k, sp_k, level_tol, level_margin, level_cap
+                        )
+                        if support and lv and not linked:  # (rare: only then look for support)
+                            lv = _supported_level(
+                                nodes, w, r, step, c, d, dq, cos_k, cos_t, sin_e, tan_e, spacing,
+                                level_tol, level_margin, level_cap, True,
+                            )  # fmt: skip
+                        linked |= lv
+                    free = (dq > d) | ((dq <= 0.0) & (raw[q] > d))
+                    link_c[n_links] = c
+                    link_q[n_links] = q
+                    n_links += np.int64(linked) * (1 - np.int64(bound))
+                    walks[going] = c
+                    if side:
+                        og = (dq <= 0.0) and _open_gap(above, below, q, d, t_far)
+                        holed[going] = h | og
+                    going += 1 - np.int64(bound | linked | free)
+                m = going
+            for t in range(n_links):
+                union(parent, labels[row + link_c[t]], labels[link_q[t]])
+
+    return walk_row
+
+
+#: The walks past the first steps: the default graph, and with the options' tests.
+_walk_row_default = _walk_row_kernel(False)
+_walk_row = _walk_row_kernel(True)
 
 
 #: The level-surface rule as the kernel takes it: (on, sin and |tan| of the row elevations
@@ -609,6 +656,7 @@ def _bridge_components(
     one = np.uint64(1)
     k_row = min(reach, w - 1)
     n_labels = np.uint64(0)
+    options = fixed_side_gaps or level[0]
     # all rows first: the walks look up and down the column of a gap (a hole in a surface?)
     for r in range(h):
         _fill_nodes(nodes, rf, sf, use_skip, r * w, w)
@@ -709,28 +757,39 @@ def _bridge_components(
                     union(parent, labels[row + c], labels[j])
         pack(left_on[: 64 * nw], on_w[0])
         pack(up_on[: 64 * nw], on_w[1])
-        _walk_row(
-            r, w, on_w, nodes, rf, labels, parent, cos_t, sin_t, threshold, sin_gamma, k_row,
-            k_up, walks, link_c, link_q, holed, fixed_side_gaps, col_above, col_below, level,
-        )  # fmt: skip
+        if options:
+            _walk_row(
+                r, w, on_w, nodes, rf, labels, parent, cos_t, sin_t, threshold, sin_gamma,
+                k_row, k_up, walks, link_c, link_q, holed, fixed_side_gaps, col_above, col_below,
+                level,
+            )  # fmt: skip
+        else:
+            _walk_row_default(
+                r, w, on_w, nodes, rf, labels, parent, cos_t, sin_t, threshold, sin_gamma,
+                k_row, k_up, walks, link_c, link_q, holed, fixed_side_gaps, col_above, col_below,
+                level,
+            )  # fmt: skip
     attach(labels, size, attached)
     return labels[:n], number(parent, size, np.int64(n_labels), min_size)
 
 
-#: (elevation bytes, width, reach) -> walk_tables; cleared when full
+#: (elevation bytes, azimuth offset bytes, width, reach) -> walk_tables_offset; cleared when
+#: full
 _TABLES: dict[tuple, tuple[np.ndarray, np.ndarray]] = {}
 
 
 def cached_walk_tables(
-    elevation: np.ndarray, width: int, reach: int
+    elevation: np.ndarray, width: int, reach: int, azimuth_offset: np.ndarray | None = None
 ) -> tuple[np.ndarray, np.ndarray]:
-    """:func:`walk_tables`, computed once per elevation, width and reach."""
-    key = (elevation.tobytes(), width, reach)
+    """:func:`walk_tables_offset`, computed once per elevation, azimuth offsets (None: zeros),
+    width and reach."""
+    offset = offset_input(azimuth_offset, elevation.size)
+    key = (elevation.tobytes(), offset.tobytes(), width, reach)
     out = _TABLES.get(key)
     if out is None:
         if len(_TABLES) >= 64:
             _TABLES.clear()
-        out = _TABLES[key] = walk_tables(elevation, width, reach)
+        out = _TABLES[key] = walk_tables_offset(elevation, offset, width, reach)
     return out
 
 
@@ -779,17 +838,18 @@ def run_bridge(
     level_margin: float = 1.5,
     level_cap_m: float = 2.0,
     level_supported: bool = False,
+    azimuth_offset: np.ndarray | None = None,
 ) -> np.ndarray:
     """Bridge labels per pixel, or per point given ``point_pixel`` (see :func:`bridge_labels`;
     ``skip``: pixels left out even with a range, e.g. ground; ``attached``: held pixels, see
     :func:`flic_cli.methods.connections.components`; ``level_tolerance`` > 0 turns the
-    level-surface rule on)."""
+    level-surface rule on; ``azimuth_offset``: (H,) of every row, radians, None = zeros)."""
     if reach_px < 1:
         raise ValueError(f"reach_px must be >= 1, got {reach_px}")
     ranges, elevation, skip, use_skip, weights, use_weights = kernel_inputs(
         ranges, elevation, skip, weights
     )
-    cos_t, sin_t = cached_walk_tables(elevation, ranges.shape[1], int(reach_px))
+    cos_t, sin_t = cached_walk_tables(elevation, ranges.shape[1], int(reach_px), azimuth_offset)
     level_on = level_tolerance > 0
     spacing = cached_level_tables(elevation, int(reach_px)) if level_on else np.zeros((1, 1))
     level = (
@@ -873,6 +933,7 @@ class Bridge:
             self.level_margin,
             self.level_cap_m,
             self.level_supported,
+            image.azimuth_offset,
         )
 
 
@@ -890,6 +951,7 @@ def bridge_labels(
     level_margin: float = Bridge.level_margin,
     level_cap_m: float = Bridge.level_cap_m,
     level_supported: bool = Bridge.level_supported,
+    azimuth_offset: np.ndarray | None = None,
 ) -> np.ndarray:
     """Bridge cluster labels of a range image (the graph is defined in the module docstring).
 
@@ -909,6 +971,9 @@ def bridge_labels(
     level_tolerance, level_margin, level_cap_m : the level-surface link of the up walk (module
         docstring, "Level surfaces"; ``level_tolerance`` 0 = off), -, -, metres.
     level_supported : level links only where a third node continues the level surface.
+    azimuth_offset : (H,) azimuth offset of every row, radians (a pixel's azimuth is its
+        column's centre plus it; :attr:`flic_cli.range_image.RangeImage.azimuth_offset`);
+        None = zeros.
 
     Returns
     -------
@@ -918,4 +983,5 @@ def bridge_labels(
     return run_bridge(
         ranges, elevation, threshold_m, gamma_deg, reach_px, min_size, skip, weights, None, None,
         fixed_side_gaps, level_tolerance, level_margin, level_cap_m, level_supported,
+        azimuth_offset,
     )  # fmt: skip
