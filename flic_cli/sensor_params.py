@@ -128,10 +128,9 @@ def _run_jumps(elevation: bytes, sensor_height_m: float) -> np.ndarray:
     table repeats every frame; the rows recovered from a SemanticKITTI scan differ per frame
     (their elevations are estimated from its points), so there every frame computes it."""
     el = np.frombuffer(elevation, dtype=np.float64)
-    out = np.full(el.size, RUN_JUMP_FLOOR)
     # numpy's tan (not numba's libm one, which differs in the last bit on some inputs)
-    _run_jump_rows(
-        el, np.tan(-el), sensor_height_m, RUN_JUMP_FLOOR, RUN_JUMP_MARGIN, RUN_GROUND_RANGE_M, out
+    out = _run_jump_rows(
+        el, np.tan(-el), sensor_height_m, RUN_JUMP_FLOOR, RUN_JUMP_MARGIN, RUN_GROUND_RANGE_M
     )
     out.setflags(write=False)
     return out
@@ -145,16 +144,16 @@ def _run_jump_rows(
     floor: float,
     margin: float,
     ground_range_m: float,
-    out: np.ndarray,
-) -> None:
-    """Fill ``out[1:]`` (the floor already in it) with the limit above every row where the row
-    above sees level ground within ``ground_range_m`` (metres); ``el`` the rows' elevations and
-    ``tan_down`` their ``tan(-el)`` (radians), ``sensor_height_m`` metres, ``floor`` and
-    ``margin`` shares of ``rho``. Each value is the same float64 operations on the same operands
-    as the whole-array form of the rule (``tests/test_sensor_params.py`` checks it bit for bit);
-    one loop instead of a dozen numpy calls on (H,) arrays, which took 40-90 us per frame on
-    the 2-core test machine, every frame on SemanticKITTI, whose rows' elevations the cache
-    never finds twice."""
+) -> np.ndarray:
+    """(H,) float64 limits: ``floor`` on every row, but where the row above sees level ground
+    within ``ground_range_m`` (metres) the ground's growth to it plus ``margin``, at least
+    ``floor`` (shares of ``rho``); ``el`` the rows' elevations and ``tan_down`` their
+    ``tan(-el)`` (radians), ``sensor_height_m`` metres. Each value is the same float64
+    operations on the same operands as the whole-array form of the rule
+    (``tests/test_sensor_params.py`` checks it bit for bit): one loop instead of a dozen numpy
+    calls on (H,) arrays, every frame on SemanticKITTI, whose rows' elevations the cache never
+    finds twice."""
+    out = np.full(el.size, floor)
     for r in range(1, el.size):
         upper = el[r - 1]  # the row above (row 0 = top)
         if upper < 0.0 and el[r] < upper:  # tan_down[r - 1] > 0: no division by zero
@@ -162,6 +161,7 @@ def _run_jump_rows(
             if reach <= ground_range_m:
                 growth = tan_down[r] / tan_down[r - 1] - 1.0
                 out[r] = max(floor, growth + margin)
+    return out
 
 
 def column_run_jumps(elevation: np.ndarray, sensor_height_m: float = 1.73) -> np.ndarray:
