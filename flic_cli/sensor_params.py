@@ -26,6 +26,7 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
+from numba import njit
 
 if TYPE_CHECKING:
     from flic_cli.config.schema import Config
@@ -123,15 +124,43 @@ RUN_GROUND_RANGE_M = 40.0
 
 @functools.lru_cache(maxsize=32)
 def _run_jumps(elevation: bytes, sensor_height_m: float) -> np.ndarray:
+    """:func:`column_run_jumps` of a table given as its float64 bytes, cached: a sensor's own
+    table repeats every frame; the rows recovered from a SemanticKITTI scan differ per frame
+    (their elevations are estimated from its points), so there every frame computes it."""
     el = np.frombuffer(elevation, dtype=np.float64)
-    out = np.full(el.size, RUN_JUMP_FLOOR)
-    lower, upper = el[1:], el[:-1]  # a row and the row above it (row 0 = top)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        reach = sensor_height_m / np.tan(-upper)  # level ground under the row above, metres
-        growth = np.tan(-lower) / np.tan(-upper) - 1.0
-    use = (upper < 0.0) & (lower < upper) & (reach <= RUN_GROUND_RANGE_M)
-    out[1:] = np.where(use, np.maximum(RUN_JUMP_FLOOR, growth + RUN_JUMP_MARGIN), RUN_JUMP_FLOOR)
+    # numpy's tan (not numba's libm one, which differs in the last bit on some inputs)
+    out = _run_jump_rows(
+        el, np.tan(-el), sensor_height_m, RUN_JUMP_FLOOR, RUN_JUMP_MARGIN, RUN_GROUND_RANGE_M
+    )
     out.setflags(write=False)
+    return out
+
+
+@njit(cache=True)
+def _run_jump_rows(
+    el: np.ndarray,
+    tan_down: np.ndarray,
+    sensor_height_m: float,
+    floor: float,
+    margin: float,
+    ground_range_m: float,
+) -> np.ndarray:
+    """(H,) float64 limits: ``floor`` on every row, but where the row above sees level ground
+    within ``ground_range_m`` (metres) the ground's growth to it plus ``margin``, at least
+    ``floor`` (shares of ``rho``); ``el`` the rows' elevations and ``tan_down`` their
+    ``tan(-el)`` (radians), ``sensor_height_m`` metres. Each value is the same float64
+    operations on the same operands as the whole-array form of the rule
+    (``tests/test_sensor_params.py`` checks it bit for bit): one loop instead of a dozen numpy
+    calls on (H,) arrays, every frame on SemanticKITTI, whose rows' elevations the cache never
+    finds twice."""
+    out = np.full(el.size, floor)
+    for r in range(1, el.size):
+        upper = el[r - 1]  # the row above (row 0 = top)
+        if upper < 0.0 and el[r] < upper:  # tan_down[r - 1] > 0: no division by zero
+            reach = sensor_height_m / tan_down[r - 1]  # level ground under the row above, metres
+            if reach <= ground_range_m:
+                growth = tan_down[r] / tan_down[r - 1] - 1.0
+                out[r] = max(floor, growth + margin)
     return out
 
 

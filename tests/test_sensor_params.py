@@ -114,6 +114,42 @@ def test_run_jumps_admit_level_ground_between_adjacent_beams(name: str) -> None:
         assert growth > 0.6
 
 
+def _run_jumps_whole_array(el: np.ndarray, h: float) -> np.ndarray:
+    """The rule as whole-array numpy operations (how column_run_jumps computed it until its
+    per-frame cost showed in flic benchmark): the reference the loop must match bit for bit."""
+    out = np.full(el.size, RUN_JUMP_FLOOR)
+    lower, upper = el[1:], el[:-1]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        reach = h / np.tan(-upper)
+        growth = np.tan(-lower) / np.tan(-upper) - 1.0
+    use = (upper < 0.0) & (lower < upper) & (reach <= RUN_GROUND_RANGE_M)
+    out[1:] = np.where(use, np.maximum(RUN_JUMP_FLOOR, growth + RUN_JUMP_MARGIN), RUN_JUMP_FLOOR)
+    return out
+
+
+def test_run_jumps_equal_the_whole_array_rule_bit_for_bit() -> None:
+    """Every sample profile and random tables (sorted like a sensor's, unsorted, with a NaN
+    row, several heights): the same float64 values as the whole-array form, so that no
+    decision of the remover moves."""
+    rng = np.random.default_rng(7)
+    tables = [_elevation(name) for name in sample.SENSOR_PROFILES]
+    for k in range(300):
+        n = int(rng.integers(2, 130))
+        el = np.sort(rng.uniform(-0.8, 0.3, n))[::-1].copy()
+        if k % 3 == 0:
+            el = rng.uniform(-1.7, 1.7, n)
+        if k % 7 == 0:
+            el[rng.integers(0, n)] = np.nan
+        tables.append(el)
+    raised = 0
+    for el in tables:
+        for h in (0.5, 1.73, 2.5):
+            want = _run_jumps_whole_array(el, h)
+            raised += int(np.any(want > RUN_JUMP_FLOOR))
+            assert np.array_equal(column_run_jumps(el, h), want)
+    assert raised > 100  # the raised rows are exercised, not only the floor
+
+
 def test_column_keeps_the_vlp32c_bottom_rows(tmp_path: Path) -> None:
     """On a VLP-32C frame the derived limits find the ground of the two lowest rows, which the
     fixed 0.3 lost (their runs ended at the next beam's ground); a config's run_jump wins."""
