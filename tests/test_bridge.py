@@ -130,9 +130,8 @@ def bridge_graph(
     return edges, margins
 
 
-@settings(max_examples=400, deadline=None)
-@given(
-    scene=surface_scenes(),
+#: Bridge's parameters as the graph tests draw them (the level rule: None = off).
+BRIDGE_PARAMS = dict(
     threshold=st.floats(0.2, 3.0),
     gamma=st.sampled_from([0.0, 1.0, 2.0, 5.0]),
     reach=st.integers(1, 20),
@@ -143,6 +142,10 @@ def bridge_graph(
         st.tuples(st.floats(0.05, 1.0), st.floats(0.5, 3.0), st.floats(0.3, 6.0), st.booleans()),
     ),
 )
+
+
+@settings(max_examples=400, deadline=None)
+@given(scene=surface_scenes(), **BRIDGE_PARAMS)
 def test_bridge_equals_components_of_its_graph(
     scene, threshold, gamma, reach, min_size, fixed, level
 ):
@@ -170,18 +173,7 @@ def offset_scenes(draw):
 
 
 @settings(max_examples=300, deadline=None)
-@given(
-    scene=offset_scenes(),
-    threshold=st.floats(0.2, 3.0),
-    gamma=st.sampled_from([0.0, 1.0, 2.0, 5.0]),
-    reach=st.integers(1, 20),
-    min_size=st.integers(1, 10),
-    fixed=st.booleans(),
-    level=st.one_of(
-        st.none(),
-        st.tuples(st.floats(0.05, 1.0), st.floats(0.5, 3.0), st.floats(0.3, 6.0), st.booleans()),
-    ),
-)
+@given(scene=offset_scenes(), **BRIDGE_PARAMS)
 def test_bridge_with_azimuth_offsets_equals_components_of_its_true_3d_graph(
     scene, threshold, gamma, reach, min_size, fixed, level
 ):
