@@ -6,7 +6,7 @@
 #     bash scripts/make_results.sh --list      # the steps: what each remakes, what it needs
 # Steps, in this order (default: all of them):
 #     bench repeats revisions evaluate ground synthetic ground-sweep ground-speed sweeps
-#     bridge-grid coverage labels dbscan pictures profile sensors sensors-synthetic bags peers cpp
+#     bridge-grid bridge-cases coverage labels dbscan pictures profile sensors sensors-synthetic bags peers cpp
 #     panoptic ouster-sdk peers-fidelity
 # The benchmarks come first, on a quiet machine: evaluate and ground take their times from them.
 # Every step's start, end and wall time go to $TMP_RESULTS/steps.log (default
@@ -37,7 +37,7 @@ METHODS=bogoslavskyi,flic0,flic1,flic6,flic14,flic1n,flic6n,flic14n,bridge,dbsca
 PEERS=flic0-scipy,flic14-scipy
 GROUND_METHODS=flic0,flic1,flic6,flic14,flic1n,flic6n,flic14n,bridge,dbscan-fast
 DEFAULT="bench repeats revisions evaluate ground synthetic ground-sweep ground-speed sweeps bridge-grid"
-DEFAULT="$DEFAULT coverage labels dbscan pictures profile sensors sensors-synthetic bags peers cpp"
+DEFAULT="$DEFAULT bridge-cases coverage labels dbscan pictures profile sensors sensors-synthetic bags peers cpp"
 DEFAULT="$DEFAULT panoptic ouster-sdk peers-fidelity"
 SENSORS=../shared/data/sensors
 # step, what it remakes, what it needs besides ../shared and the dev install (the wall time of
@@ -54,6 +54,7 @@ ground-sweep      results/ground/sweep_column*.csv                              
 ground-speed      results/ground/speed_per_point_*.csv                                     quiet machine
 sweeps            results/sweep/{flic0,flic1-map,flic1-neighbour,bogoslavskyi,dbscan,bridge-default}/  -
 bridge-grid       results/sweep/bridge/{kitti,sample0,sample1}/                            -
+bridge-cases      results/bridge-cases/ (speed/: quiet machine)                            -
 coverage          results/projection_coverage.csv                                          -
 labels            results/labels/fingerprint.csv                                           -
 dbscan            results/dbscan-backends/                                                 -
@@ -267,6 +268,50 @@ for step in $STEPS; do
         test "$v" = bridge_g200_r12 || rm -f "$out/sweep.png"
       done
     done
+    ;;
+  bridge-cases)
+    # Bridge's weak cases and the rules measured against them: results/bridge-cases/README.md.
+    # One evaluation per data set with every variant of configs/bridge-cases.toml.
+    BC=$TMP/bridge-cases
+    test -f "$BC/cases.csv" || python scripts/bridge_cases.py "$BC"
+    VARIANTS=bridge,bridge-side-gaps,bridge-level,bridge-level-05,bridge-level-cap3
+    VARIANTS=$VARIANTS,bridge-level-supported
+    sample "$TMP/sample-seed0" 20 0
+    sample "$TMP/sample-seed1" 20 1
+    for set in "cases:$BC:$VARIANTS,flic0,bogoslavskyi:no-ground" \
+      "kitti:$DATA:$VARIANTS:both" \
+      "sample0:$TMP/sample-seed0/semantickitti:$VARIANTS,flic0,bogoslavskyi:both" \
+      "sample1:$TMP/sample-seed1/semantickitti:bridge,bridge-side-gaps,flic0,bogoslavskyi:both"; do
+      IFS=: read -r name data methods setting <<< "$set"
+      out=results/bridge-cases/$name
+      fresh "$out"
+      flic evaluate "$data" --config configs/bridge-cases.toml --methods "$methods" \
+        --setting "$setting" --ground-remover column --jobs "$JOBS" --out "$out"
+      python scripts/paired_differences.py "$out" --out "$out/paired.csv"
+      # the mean IoU per case, spacing and range (reads per_object.csv)
+      if [ "$name" = cases ]; then
+        python scripts/bridge_cases.py "$BC" --table "$out" --dest results/bridge-cases
+      fi
+      keep "$out" table.csv by_class.csv by_distance.csv paired.csv
+    done
+    cp "$BC/cases.csv" results/bridge-cases/cases/objects.csv
+    # Bridge with the removed ground's returns seen as free space (ground_oracle.py's "labels,
+    # per point" row against the no-ground setting), on the scenes and three samples
+    sample "$TMP/sample-seed7" 60 7
+    for set in "cases:$BC" "sample0:$TMP/sample-seed0/semantickitti" \
+      "sample1:$TMP/sample-seed1/semantickitti" "sample7:$TMP/sample-seed7/semantickitti"; do
+      name=${set%%:*} data=${set#*:}
+      mkdir -p "results/bridge-cases/$name"
+      python scripts/ground_oracle.py "$data" --methods bridge,flic0 \
+        --out "results/bridge-cases/$name/ground_seen.csv"
+    done
+    # speed: every variant with its ground extraction, interleaved (quiet machine)
+    L100=$TMP/log-100
+    test -d "$L100/moosmann" || flic sample "$L100" --frames 100
+    fresh results/bridge-cases/speed
+    flic benchmark "$L100/moosmann" --config configs/bridge-cases.toml --methods "$VARIANTS" \
+      --rounds 5 --threads 1 --no-plots --out results/bridge-cases/speed
+    keep results/bridge-cases/speed summary.csv environment.json
     ;;
   coverage)
     python scripts/projection_coverage.py "$DATA" --out results/projection_coverage.csv

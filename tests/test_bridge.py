@@ -547,7 +547,7 @@ def test_a_box_shaped_vehicle_is_one_cluster_with_the_level_rule(kind, distance_
     # with the level-surface link of the up walk the face and the top are one cluster. (From
     # 12 m on both stay split with the defaults: the footprint there exceeds the cap over the
     # margin, or the hit lies beyond a quarter footprint from the level prediction;
-    # results/bridge-cases/level/.)
+    # results/bridge-cases/, "A rule for cause 2".)
     ranges, elevation, instance = _vehicle_image(kind, distance_m)
     obj = instance == 1
     assert obj.sum() > 200
@@ -563,7 +563,7 @@ def test_a_low_box_before_a_van_stays_apart_where_the_footprint_exceeds_the_cap(
     # The hood box's top and the van's face 0.5 m behind it lie at one height: the scan cannot
     # tell them from one level surface. Beyond 12 m the footprint spacing a level surface at
     # that height would show exceeds the cap, so the level rule links nothing there and the two
-    # stay apart; at 8-12 m it joins them (results/bridge-cases/level/).
+    # stay apart; at 8-12 m it joins them (results/bridge-cases/, "A rule for cause 2").
     ranges, elevation, instance = _vehicle_image("pair", distance_m)
     labels = bridge_labels(ranges, elevation, min_size=1, level_tolerance=0.25)
     a, b = labels[instance == 1], labels[instance == 2]
