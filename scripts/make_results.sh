@@ -274,8 +274,10 @@ for step in $STEPS; do
     # One evaluation per data set with every variant of configs/bridge-cases.toml.
     BC=$TMP/bridge-cases
     test -f "$BC/cases.csv" || python scripts/bridge_cases.py "$BC"
-    VARIANTS=bridge,bridge-side-gaps,bridge-level,bridge-level-05,bridge-level-cap3
-    VARIANTS=$VARIANTS,bridge-level-supported
+    # Bridge and every variant the config defines (read from it, not listed twice)
+    VARIANTS=$(python -c 'import sys, tomllib
+print(",".join(["bridge", *tomllib.load(open(sys.argv[1], "rb"))["methods"]]))' \
+      configs/bridge-cases.toml)
     sample "$TMP/sample-seed0" 20 0
     sample "$TMP/sample-seed1" 20 1
     for set in "cases:$BC:$VARIANTS,flic0,bogoslavskyi:no-ground" \
