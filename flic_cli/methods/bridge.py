@@ -276,16 +276,17 @@ def _walk_row_kernel(options: bool) -> Callable[..., None]:
                 while bits:
                     c = 64 * k + np.int64(trailing_zeros(bits))
                     walks[m] = c
-                    c1 = c + dc
-                    c1 += w if c1 < 0 else 0
-                    c1 -= w if c1 >= w else 0
-                    # the first step went on past an open gap (not a nearer node, not a hole in
-                    # p's surface)
-                    q1 = row_1 + c1
-                    d1 = np.float64(nodes[row + c])
-                    t1 = max(threshold, d1 * sin_gamma)
-                    e1 = side and nodes[q1] <= 0.0
-                    holed[m] = e1 and _open_gap(above, below, q1, d1, t1)
+                    if options:
+                        c1 = c + dc
+                        c1 += w if c1 < 0 else 0
+                        c1 -= w if c1 >= w else 0
+                        # the first step went on past an open gap (not a nearer node, not a hole
+                        # in p's surface)
+                        q1 = row_1 + c1
+                        d1 = np.float64(nodes[row + c])
+                        t1 = max(threshold, d1 * sin_gamma)
+                        e1 = side and nodes[q1] <= 0.0
+                        holed[m] = e1 and _open_gap(above, below, q1, d1, t1)
                     m += 1
                     bits &= bits - one
             n_links = 0
@@ -295,9 +296,11 @@ def _walk_row_kernel(options: bool) -> Callable[..., None]:
                 cos_k = cos_t[di, r, step]
                 sin_k = sin_t[di, r, step]
                 row_q = (r + step * dr) * w
-                r_q = r + step * dr
-                se_p, se_q, te_q = sin_e[r], sin_e[r_q], tan_e[r_q]
-                sp_k = spacing[r, step] if lv_walk else 0.0
+                se_p = se_q = te_q = sp_k = 0.0
+                if lv_walk:
+                    r_q = r + step * dr
+                    se_p, se_q, te_q = sin_e[r], sin_e[r_q], tan_e[r_q]
+                    sp_k = spacing[r, step]
                 going = 0
                 for t in range(m):
                     c = walks[t]
@@ -453,19 +456,28 @@ def _supported_level(
 
 
 @njit(cache=True, inline="always")
-def _fill_nodes(
-    nodes: np.ndarray, rf: np.ndarray, sf: np.ndarray, use_skip: bool, row: int, w: int
+def _fill_row(
+    d: np.ndarray,
+    node: np.ndarray,
+    rf: np.ndarray,
+    sf: np.ndarray,
+    use_skip: bool,
+    row: int,
+    w: int,
 ) -> None:
-    """The node ranges of the row starting at flat index ``row`` (0 where no node)."""
+    """The node ranges ``d`` (0 where no node) and the flags ``node`` of the row starting at flat
+    index ``row``, in one pass."""
     if use_skip:
         for c in range(w):
             x = rf[row + c]
             ok = (x > 0) & ~sf[row + c]
-            nodes[row + c] = x if ok else np.float32(0.0)
+            d[c] = x if ok else np.float32(0.0)
+            node[c] = ok
     else:
         for c in range(w):
             x = rf[row + c]
-            nodes[row + c] = x if x > 0 else np.float32(0.0)
+            d[c] = x if x > 0 else np.float32(0.0)
+            node[c] = x > 0
 
 
 @njit(cache=True, inline="always")
@@ -657,9 +669,12 @@ def _bridge_components(
     k_row = min(reach, w - 1)
     n_labels = np.uint64(0)
     options = fixed_side_gaps or level[0]
-    # all rows first: the walks look up and down the column of a gap (a hole in a surface?)
-    for r in range(h):
-        _fill_nodes(nodes, rf, sf, use_skip, r * w, w)
+    # With an option on, all rows first: its walks look up and down the column of a gap (a hole
+    # in a surface?) and level links at the row below; the default walks look at earlier rows
+    # only, so each row is filled as it comes (one pass for ranges and flags).
+    if options:
+        for r in range(h):
+            _fill_row(nodes[r * w : (r + 1) * w], node, rf, sf, use_skip, r * w, w)
     if fixed_side_gaps:
         col_above, col_below = _column_neighbours(nodes, h, w, h)
     else:
@@ -668,8 +683,7 @@ def _bridge_components(
         row = r * w
         d = nodes[row : row + w]
         raw = rf[row : row + w]
-        for c in range(w):
-            node[c] = d[c] > 0
+        _fill_row(d, node, rf, sf, use_skip, row, w)  # (with an option on: again, the same)
         k_up = min(reach, r)
         if k_row >= 1:
             _first_steps(
@@ -794,6 +808,8 @@ def cached_walk_tables(
 
 
 _LEVEL: dict[tuple, np.ndarray] = {}
+#: the level rule's tables when it is off (spacing, sin and |tan| of the elevations): not read
+_NO_LEVEL = (np.zeros((1, 1)), np.zeros(1), np.zeros(1))
 
 
 def cached_level_tables(elevation: np.ndarray, reach: int) -> np.ndarray:
@@ -851,10 +867,14 @@ def run_bridge(
     )
     cos_t, sin_t = cached_walk_tables(elevation, ranges.shape[1], int(reach_px), azimuth_offset)
     level_on = level_tolerance > 0
-    spacing = cached_level_tables(elevation, int(reach_px)) if level_on else np.zeros((1, 1))
+    if level_on:
+        spacing = cached_level_tables(elevation, int(reach_px))
+        sin_e, tan_e = np.sin(elevation), np.abs(np.tan(elevation))
+    else:  # not read
+        spacing, sin_e, tan_e = _NO_LEVEL
     level = (
-        bool(level_on), np.sin(elevation), np.abs(np.tan(elevation)), spacing,
-        float(level_tolerance), float(level_margin), float(level_cap_m), bool(level_supported),
+        bool(level_on), sin_e, tan_e, spacing, float(level_tolerance), float(level_margin),
+        float(level_cap_m), bool(level_supported),
     )  # fmt: skip
     args = (
         ranges, skip, use_skip, cos_t, sin_t, float(threshold_m),

@@ -204,7 +204,6 @@ def _differ(flags: np.ndarray, a: np.ndarray, b: np.ndarray) -> None:
 
 @njit(cache=True)
 def _join(
-    flags: np.ndarray,
     words: np.ndarray,
     mask: np.ndarray,
     comp: np.ndarray,
@@ -212,8 +211,6 @@ def _join(
     parent: np.ndarray,
     row: int,
     partner: int,
-    lo: int,
-    hi: int,
     wrap: int,
     w: int,
     cos_a: float,
@@ -222,19 +219,10 @@ def _join(
     param: float,
 ) -> None:
     """Merge the linked pairs (row + c, partner + c) of pixels in different direct components,
-    for the columns ``lo <= c < hi`` set in the words ``mask``; a partner column past ``wrap``
-    is taken ``w`` columns back (the 360 deg seam). The flags "different components" of the
-    whole range are computed first (:func:`_differ`, vectorised) and packed into ``words``
-    (``flags``: the bytes, 8 of slack); only the flagged pairs are tested (by ``criterion``, at
-    the angle cos ``cos_a``, sin ``sin_a``)."""
-    mid = min(hi, wrap)
-    if lo < mid:
-        _differ(flags[lo:mid], comp[row + lo : row + mid], comp[partner + lo : partner + mid])
-    if mid < hi:
-        _differ(
-            flags[mid:hi], comp[row + mid : row + hi], comp[partner + mid - w : partner + hi - w]
-        )
-    pack(flags[: flags.size - 8], words)
+    for the columns c set in ``words & mask``; a partner column past ``wrap`` is taken ``w``
+    columns back (the 360 deg seam). ``words``: the packed flags "different components" of the
+    pairs (:func:`_differ`, then :func:`flic_cli.bitwords.pack`); only the flagged pairs are
+    tested (by ``criterion``, at the angle cos ``cos_a``, sin ``sin_a``)."""
     one = np.uint64(1)
     for k in range(words.size):
         bits = words[k] & mask[k]
@@ -357,17 +345,16 @@ def components(
         mask_h = np.empty(nw, dtype=np.uint64)
         flag_w = np.empty(nw, dtype=np.uint64)
         flags = np.zeros(64 * nw + 8, dtype=np.uint8)
+    # Each join: the flags of the pair rows (vectorised), packed, then the flagged pairs. The two
+    # readings keep loops of their own: one loop branching on the reading per row ran 4 % slower
+    # (FLIC 14 MC, scripts/kernel_revisions.py; results/benchmark/revisions/README.md).
     for m in range(1, steps.shape[0]):
         kr = steps[m, 0]
         kc = steps[m, 1]
-        # the rows r0, r0 + rstep, ... and, in each, the columns whose connections exist: in the
-        # map reading, the lattice columns c0, c0 + kc, ..., last (mask_v; mask_h without last)
-        c0 = 0
-        last = 0
-        cols = 0
         if lattice[m]:
+            # the rows r0, r0 + kr, ... and in each the lattice columns c0, c0 + kc, ..., last
+            # (mask_v; mask_h without last)
             r0 = offsets[m, 0] % kr
-            rstep = kr
             c0 = offsets[m, 1] % kc
             if c0 >= w:
                 continue  # no lattice column
@@ -375,24 +362,25 @@ def components(
             cols = (last - c0) // kc + 1
             _lattice_mask(mask_v, c0, kc, cols)
             _lattice_mask(mask_h, c0, kc, cols - 1)
-        else:
-            r0 = 0
-            rstep = 1
-            _lattice_mask(mask_v, 0, 1, w)
-        shift = kc % w
-        for r in range(r0, h, rstep):
-            row = r * w
-            if r + kr < h:  # down: (r, c) to (r + kr, c)
-                _join(
-                    flags, flag_w, mask_v, comp, nodes, parent, row, row + kr * w, 0, w, w, w,
-                    angles[m, r, 0], angles[m, r, 1], criterion, param,
-                )  # fmt: skip
-            if lattice[m]:
+            for r in range(r0, h, kr):
+                row = r * w
+                if r + kr < h:  # down: (r, c) to (r + kr, c)
+                    below = row + kr * w
+                    _differ(flags[:w], comp[row : row + w], comp[below : below + w])
+                    pack(flags[: 64 * nw], flag_w)
+                    _join(
+                        flag_w, mask_v, comp, nodes, parent, row, below, w, w,
+                        angles[m, r, 0], angles[m, r, 1], criterion, param,
+                    )  # fmt: skip
                 if cols > 1:
                     # right: the pairs (c, c + kc) of lattice columns c < last
+                    i0 = row + c0
+                    i1 = row + last - kc + 1
+                    _differ(flags[c0 : last - kc + 1], comp[i0:i1], comp[i0 + kc : i1 + kc])
+                    pack(flags[: 64 * nw], flag_w)
                     _join(
-                        flags, flag_w, mask_h, comp, nodes, parent, row, row + kc, c0,
-                        last - kc + 1, w, w, angles[m, r, 2], angles[m, r, 3], criterion, param,
+                        flag_w, mask_h, comp, nodes, parent, row, row + kc, w, w,
+                        angles[m, r, 2], angles[m, r, 3], criterion, param,
                     )  # fmt: skip
                     # from the last lattice column across the seam to the first
                     i = row + last
@@ -401,11 +389,28 @@ def components(
                         if edge(nodes[i], nodes[j], angles[m, r, 4], angles[m, r, 5],
                                    criterion, param):  # fmt: skip
                             union(parent, comp[i], comp[j])
-            elif shift:  # right: (c, c + kc), wrapping (shift 0: every pixel its own neighbour)
-                _join(
-                    flags, flag_w, mask_v, comp, nodes, parent, row, row + shift, 0, w, w - shift,
-                    w, angles[m, r, 2], angles[m, r, 3], criterion, param,
-                )  # fmt: skip
+        else:
+            shift = kc % w
+            _lattice_mask(mask_v, 0, 1, w)
+            for r in range(h):
+                row = r * w
+                if r + kr < h:  # down: (r, c) to (r + kr, c)
+                    below = row + kr * w
+                    _differ(flags[:w], comp[row : row + w], comp[below : below + w])
+                    pack(flags[: 64 * nw], flag_w)
+                    _join(
+                        flag_w, mask_v, comp, nodes, parent, row, below, w, w,
+                        angles[m, r, 0], angles[m, r, 1], criterion, param,
+                    )  # fmt: skip
+                if shift:  # right: (c, c + kc), wrapping (shift 0: every pixel its own neighbour)
+                    rest = w - shift
+                    _differ(flags[:rest], comp[row : row + rest], comp[row + shift : row + w])
+                    _differ(flags[rest:w], comp[row + rest : row + w], comp[row : row + shift])
+                    pack(flags[: 64 * nw], flag_w)
+                    _join(
+                        flag_w, mask_v, comp, nodes, parent, row, row + shift, rest, w,
+                        angles[m, r, 2], angles[m, r, 3], criterion, param,
+                    )  # fmt: skip
 
     attach(labels, size, attached)
     return labels[:n], number(parent, size, nl, min_size)
