@@ -61,10 +61,12 @@ def bridge_graph(
     fixed_side_gaps=True,
     level=None,
     azimuth_offset=None,
+    open_holes=None,
 ):
     """Edges of the Bridge graph, walked exactly as the module docstring says; ``level``:
     (tolerance, margin, cap, supported only) of the level rule of the up walk, or None (off);
-    ``azimuth_offset``: (H,) of every row, radians (the 3D points from the true directions).
+    ``azimuth_offset``: (H,) of every row, radians (the 3D points from the true directions);
+    ``open_holes``: the most open holes a sideways walk crosses, or None (no limit).
 
     Returns the edges and, for every distance test made, ``distance - t_p`` (to stay away from
     ties between float32 ranges and float64 coordinates) and, for every gap test, the smallest
@@ -86,11 +88,18 @@ def bridge_graph(
                     break  # inside a surface: no diagonal walks
                 k_max = min(reach, r if dr else reach, w - 1 if dc else reach)
                 crossed_gap = False  # an open gap (not a hole in p's surface) passed
+                n_open = 0  # open holes passed: no node within t_far of d above or below
                 for k in range(1, k_max + 1):
                     rq, cq = r + k * dr, (c + k * dc) % w
                     if not node[rq, cq]:
                         if ranges[rq, cq] > d:
                             break  # a range beyond p outside the mask: free space
+                        if open_holes is not None and dc != 0:
+                            near = column_neighbours(node, ranges, rq, cq)
+                            margins.extend(abs(x - float(d)) - t_far for x in near)
+                            n_open += not any(abs(x - float(d)) < t_far for x in near)
+                            if n_open > open_holes:
+                                break
                         if fixed_side_gaps and dc != 0:
                             # open: the first node above or below is beyond d + t_far (the
                             # scan sees through the gap's column) and neither is within t_far
@@ -137,6 +146,7 @@ BRIDGE_PARAMS = dict(
     reach=st.integers(1, 20),
     min_size=st.integers(1, 10),
     fixed=st.booleans(),
+    open_holes=st.one_of(st.none(), st.integers(0, 4)),
     level=st.one_of(
         st.none(),
         st.tuples(st.floats(0.05, 1.0), st.floats(0.5, 3.0), st.floats(0.3, 6.0), st.booleans()),
@@ -147,17 +157,20 @@ BRIDGE_PARAMS = dict(
 @settings(max_examples=400, deadline=None)
 @given(scene=surface_scenes(), **BRIDGE_PARAMS)
 def test_bridge_equals_components_of_its_graph(
-    scene, threshold, gamma, reach, min_size, fixed, level
+    scene, threshold, gamma, reach, min_size, fixed, open_holes, level
 ):
     ranges, elevation, mask, weights = scene
-    edges, margins = bridge_graph(ranges, elevation, mask, threshold, gamma, reach, fixed, level)
+    edges, margins = bridge_graph(
+        ranges, elevation, mask, threshold, gamma, reach, fixed, level, open_holes=open_holes
+    )
     assume(all(abs(m) > 1e-4 for m in margins))
     node = mask & (ranges > 0)
     expected = image_components(ranges.shape, node, edges, min_size, weights)
     lv = level or (0.0, 1.5, 2.0, False)
     got = bridge_labels(
-        ranges, elevation, threshold, gamma, reach, min_size, mask, weights, fixed, *lv
-    )
+        ranges, elevation, threshold, gamma, reach, min_size, mask, weights, fixed, *lv,
+        open_holes_px=open_holes,
+    )  # fmt: skip
     np.testing.assert_array_equal(got, expected)
 
 
@@ -175,21 +188,22 @@ def offset_scenes(draw):
 @settings(max_examples=300, deadline=None)
 @given(scene=offset_scenes(), **BRIDGE_PARAMS)
 def test_bridge_with_azimuth_offsets_equals_components_of_its_true_3d_graph(
-    scene, threshold, gamma, reach, min_size, fixed, level
+    scene, threshold, gamma, reach, min_size, fixed, open_holes, level
 ):
     # the graph's distances from the 3D points of each pixel's true direction (its row's
     # elevation, its column's centre plus its row's azimuth offset)
     ranges, elevation, mask, weights, offset = scene
     edges, margins = bridge_graph(
-        ranges, elevation, mask, threshold, gamma, reach, fixed, level, offset
+        ranges, elevation, mask, threshold, gamma, reach, fixed, level, offset, open_holes
     )
     assume(all(abs(m) > 1e-4 for m in margins))
     node = mask & (ranges > 0)
     expected = image_components(ranges.shape, node, edges, min_size, weights)
     lv = level or (0.0, 1.5, 2.0, False)
     got = bridge_labels(
-        ranges, elevation, threshold, gamma, reach, min_size, mask, weights, fixed, *lv, offset
-    )
+        ranges, elevation, threshold, gamma, reach, min_size, mask, weights, fixed, *lv, offset,
+        open_holes,
+    )  # fmt: skip
     np.testing.assert_array_equal(got, expected)
 
 
@@ -427,6 +441,36 @@ def test_a_hole_in_a_surface_is_still_bridged_at_the_far_link_distance():
     assert np.unique(labels[window == 20.0]).size == 1
 
 
+@pytest.mark.parametrize("distance_m", [16.0, 20.0, 25.0])
+def test_open_holes_keep_two_people_apart_with_nothing_behind_them(distance_m):
+    # two people 0.5 m apart, ground removed, nothing seen between them: the gap is open
+    # holes only (8-10 columns at 16-20 m), which fixed_side_gaps cannot tell from a hole in a
+    # surface (nothing farther is seen through it)
+    ranges, elevation, instance = _two_people_image(distance_m, 0.5)
+    for open_holes, apart in ((3, True), (None, False)):
+        labels = bridge_labels(ranges, elevation, min_size=10, open_holes_px=open_holes)
+        a, b = labels[instance == 1], labels[instance == 2]
+        la, lb = np.bincount(a).argmax(), np.bincount(b).argmax()
+        assert la > 0 and lb > 0 and (a == la).all() and (b == lb).all()
+        assert (la != lb) == apart
+
+
+def test_a_hole_that_its_surface_closes_is_bridged_with_open_holes_limited():
+    # 8 empty columns inside a wall at 20 m: the wall above and below closes them, so no open
+    # hole is crossed even with open_holes_px = 0; the same columns empty over the wall's whole
+    # height are open holes: the walk stops after open_holes_px of them
+    ranges = wall(20.0, slice(100, 160))
+    hole = ranges.copy()
+    hole[26:34, 126:134] = 0.0
+    labels = bridge_labels(hole, ELEVATION, min_size=1, open_holes_px=0)
+    assert np.unique(labels[hole > 0]).size == 1
+    gap = ranges.copy()
+    gap[:, 126:134] = 0.0
+    for open_holes, parts in ((7, 2), (8, 1), (None, 1)):
+        labels = bridge_labels(gap, ELEVATION, min_size=1, open_holes_px=open_holes)
+        assert np.unique(labels[gap == 20.0]).size == parts
+
+
 @st.composite
 def far_scenes(draw):
     """2048-column images with a few far boxes side by side, holes, and background seen above
@@ -451,14 +495,25 @@ def far_scenes(draw):
 
 
 @settings(max_examples=60, deadline=None)
-@given(scene=far_scenes(), reach=st.sampled_from([4, 12]))
-def test_bridge_with_fixed_side_gaps_equals_its_graph_on_far_scenes(scene, reach):
+@given(
+    scene=far_scenes(),
+    reach=st.sampled_from([4, 12]),
+    fixed=st.booleans(),
+    open_holes=st.sampled_from([None, 0, 2, 4]),
+)
+def test_bridge_with_fixed_side_gaps_equals_its_graph_on_far_scenes(
+    scene, reach, fixed, open_holes
+):
     ranges, elevation = scene
     mask = np.ones(ranges.shape, bool)
-    edges, margins = bridge_graph(ranges, elevation, mask, 0.35, 2.0, reach, True)
+    edges, margins = bridge_graph(
+        ranges, elevation, mask, 0.35, 2.0, reach, fixed, open_holes=open_holes
+    )
     assume(all(abs(m) > 1e-4 for m in margins))
     expected = image_components(ranges.shape, ranges > 0, edges, 1, np.ones(ranges.shape))
-    got = bridge_labels(ranges, elevation, 0.35, 2.0, reach, 1, None, None, True)
+    got = bridge_labels(
+        ranges, elevation, 0.35, 2.0, reach, 1, None, None, fixed, open_holes_px=open_holes
+    )
     np.testing.assert_array_equal(got, expected)
 
 

@@ -98,6 +98,19 @@ IoU), the 50 shared KITTI frames gain 0.15 points of IoU_mu, but the synthetic s
 (rows of identical parked cars, people before cars, joined as above), so it is off by default;
 ``level_supported`` keeps the sample (-0.25, not significant) but fixes only the car at 8 m and
 gains the shared frames 0.02.
+
+Open holes (``open_holes_px``; None = no limit, the default)
+------------------------------------------------------------
+An empty pixel ``e`` that a sideways walk (left, up-left, up-right) of ``p`` passes is a *closed*
+hole when the first node above ``e`` or the first node below it in its column lies within ``t_p``
+of ``d_p`` (p's surface goes on around the hole: dark paint, a window with the roof above it),
+else an *open* hole (between two people with the ground removed below and the facade or sky
+above). With ``open_holes_px = n`` a walk that has passed more than ``n`` open holes stops;
+closed holes and nearer occluders do not count, and the up walk is not limited. Unlike
+``fixed_side_gaps`` it does not ask for a farther return in the hole's column, so it also
+splits people with nothing behind them; unlike a shorter ``reach_px`` or a smaller ``gamma_deg``
+for the sideways walks (both measured, both cost the shared frames 1-6 points), it leaves the
+far link distance on surfaces and over holes that the surface closes as it is.
 """
 
 from __future__ import annotations
@@ -239,6 +252,8 @@ def _walk_row_kernel(options: bool) -> Callable[..., None]:
         above: np.ndarray,
         below: np.ndarray,
         level: LevelRule,
+        max_open: int,
+        holes: np.ndarray,
     ) -> None:
         """The walks of row ``r`` past their first steps (module docstring); every link found
         merges two labels.
@@ -254,8 +269,10 @@ def _walk_row_kernel(options: bool) -> Callable[..., None]:
         passed an open gap; with ``fixed_side_gaps`` such a walk links only within ``threshold``
         (module docstring, "Gaps beside"); ``above``, ``below``: the ranges of the first node
         above and below every pixel (:func:`_column_neighbours`). ``level``: the level-surface
-        rule of the up walk (:func:`level_tables`, module docstring). Without ``options``
-        (:func:`_walk_row_kernel`) ``fixed_side_gaps`` and ``level`` are not read.
+        rule of the up walk (:func:`level_tables`, module docstring). ``max_open``: the most
+        open holes a sideways walk crosses (-1 = no limit; module docstring, "Open holes"),
+        ``holes``: scratch, the open holes each walk has crossed. Without ``options``
+        (:func:`_walk_row_kernel`) ``fixed_side_gaps``, ``level`` and ``max_open`` are not read.
         """
         one = np.uint64(1)
         level_on, sin_e, tan_e, spacing, level_tol, level_margin, level_cap, support = level
@@ -269,12 +286,14 @@ def _walk_row_kernel(options: bool) -> Callable[..., None]:
                 continue
             side = options & fixed_side_gaps & (di != 1)
             lv_walk = options & level_on & (di == 1)
+            limit = options & (max_open >= 0) & (di != 1)
             row_1 = (r + dr) * w
             m = 0
             for k in range(on_w.shape[1]):
                 bits = on_w[di, k]
                 while bits:
                     c = 64 * k + np.int64(trailing_zeros(bits))
+                    bits &= bits - one
                     walks[m] = c
                     if options:
                         c1 = c + dc
@@ -285,10 +304,16 @@ def _walk_row_kernel(options: bool) -> Callable[..., None]:
                         q1 = row_1 + c1
                         d1 = np.float64(nodes[row + c])
                         t1 = max(threshold, d1 * sin_gamma)
-                        e1 = side and nodes[q1] <= 0.0
-                        holed[m] = e1 and _open_gap(above, below, q1, d1, t1)
+                        e1 = nodes[q1] <= 0.0
+                        holed[m] = side and e1 and _open_gap(above, below, q1, d1, t1)
+                        if limit:
+                            # the first step crossed an open hole (no surface at p's range in
+                            # its column); a walk past more than max_open of them stops
+                            nh = 1 if e1 and not _closed(above, below, q1, d1, t1) else 0
+                            holes[m] = nh
+                            if nh > max_open:
+                                continue
                     m += 1
-                    bits &= bits - one
             n_links = 0
             for step in range(2, kmax + 1):
                 if m == 0:
@@ -337,7 +362,14 @@ def _walk_row_kernel(options: bool) -> Callable[..., None]:
                     if side:
                         og = (dq <= 0.0) and _open_gap(above, below, q, d, t_far)
                         holed[going] = h | og
-                    going += 1 - np.int64(bound | linked | free)
+                    over = False
+                    if limit:
+                        nh = holes[t]
+                        if dq <= 0.0 and not _closed(above, below, q, d, t_far):
+                            nh += 1
+                        holes[going] = nh
+                        over = nh > max_open
+                    going += 1 - np.int64(bound | linked | free | over)
                 m = going
             for t in range(n_links):
                 union(parent, labels[row + link_c[t]], labels[link_q[t]])
@@ -481,17 +513,25 @@ def _fill_row(
 
 
 @njit(cache=True, inline="always")
-def _open_gap(above: np.ndarray, below: np.ndarray, q: int, d: float, tp: float) -> bool:
-    """Whether the empty pixel ``q`` (flat index) is an open gap beside a node at range ``d``:
-    the first node above it or the first node below it in its column (``above``, ``below``:
-    their ranges, 0 = none) lies beyond ``d + tp`` (the scan sees through the gap's column) and
-    neither lies within ``tp`` of ``d`` (a hole in p's surface shows that surface above or
-    below it)."""
+def _closed(above: np.ndarray, below: np.ndarray, q: int, d: float, tp: float) -> bool:
+    """Whether the empty pixel ``q`` (flat index) is a hole in a surface at range ``d``: the
+    first node above it or the first node below it in its column (``above``, ``below``: their
+    ranges, 0 = none) lies within ``tp`` of ``d``."""
     a = np.float64(above[q])
     b = np.float64(below[q])
-    closed = ((a > 0.0) & (abs(a - d) < tp)) | ((b > 0.0) & (abs(b - d) < tp))
+    return ((a > 0.0) & (abs(a - d) < tp)) | ((b > 0.0) & (abs(b - d) < tp))
+
+
+@njit(cache=True, inline="always")
+def _open_gap(above: np.ndarray, below: np.ndarray, q: int, d: float, tp: float) -> bool:
+    """Whether the empty pixel ``q`` (flat index) is an open gap beside a node at range ``d``:
+    not :func:`_closed` (a hole in p's surface shows that surface above or below it), and the
+    first node above it or the first node below it in its column lies beyond ``d + tp`` (the
+    scan sees through the gap's column)."""
+    a = np.float64(above[q])
+    b = np.float64(below[q])
     seen_through = (a > d + tp) | (b > d + tp)
-    return (not closed) and seen_through
+    return (not _closed(above, below, q, d, tp)) and seen_through
 
 
 @njit(cache=True)
@@ -623,6 +663,7 @@ def _bridge_components(
     attached: np.ndarray,
     fixed_side_gaps: bool,
     level: LevelRule,
+    max_open: int,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Provisional label of every pixel (0 = no node) and the final label of each provisional
     label (0 = dropped): the connected components of the Bridge graph (module docstring); the
@@ -665,17 +706,18 @@ def _bridge_components(
     link_c = np.empty(w, dtype=np.int64)
     link_q = np.empty(w, dtype=np.int64)
     holed = np.empty(w, dtype=np.bool_)
+    holes = np.empty(w, dtype=np.int64)
     one = np.uint64(1)
     k_row = min(reach, w - 1)
     n_labels = np.uint64(0)
-    options = fixed_side_gaps or level[0]
+    options = fixed_side_gaps or level[0] or max_open >= 0
     # With an option on, all rows first: its walks look up and down the column of a gap (a hole
     # in a surface?) and level links at the row below; the default walks look at earlier rows
     # only, so each row is filled as it comes (one pass for ranges and flags).
     if options:
         for r in range(h):
             _fill_row(nodes[r * w : (r + 1) * w], node, rf, sf, use_skip, r * w, w)
-    if fixed_side_gaps:
+    if fixed_side_gaps or max_open >= 0:
         col_above, col_below = _column_neighbours(nodes, h, w, h)
     else:
         col_above = col_below = np.zeros(1, dtype=np.float32)
@@ -775,13 +817,13 @@ def _bridge_components(
             _walk_row(
                 r, w, on_w, nodes, rf, labels, parent, cos_t, sin_t, threshold, sin_gamma,
                 k_row, k_up, walks, link_c, link_q, holed, fixed_side_gaps, col_above, col_below,
-                level,
+                level, max_open, holes,
             )  # fmt: skip
         else:
             _walk_row_default(
                 r, w, on_w, nodes, rf, labels, parent, cos_t, sin_t, threshold, sin_gamma,
                 k_row, k_up, walks, link_c, link_q, holed, fixed_side_gaps, col_above, col_below,
-                level,
+                level, max_open, holes,
             )  # fmt: skip
     attach(labels, size, attached)
     return labels[:n], number(parent, size, np.int64(n_labels), min_size)
@@ -855,13 +897,17 @@ def run_bridge(
     level_cap_m: float = 2.0,
     level_supported: bool = False,
     azimuth_offset: np.ndarray | None = None,
+    open_holes_px: int | None = None,
 ) -> np.ndarray:
     """Bridge labels per pixel, or per point given ``point_pixel`` (see :func:`bridge_labels`;
     ``skip``: pixels left out even with a range, e.g. ground; ``attached``: held pixels, see
     :func:`flic_cli.methods.connections.components`; ``level_tolerance`` > 0 turns the
-    level-surface rule on; ``azimuth_offset``: (H,) of every row, radians, None = zeros)."""
+    level-surface rule on; ``azimuth_offset``: (H,) of every row, radians, None = zeros;
+    ``open_holes_px``: the most open holes a sideways walk crosses, None = no limit)."""
     if reach_px < 1:
         raise ValueError(f"reach_px must be >= 1, got {reach_px}")
+    if open_holes_px is not None and open_holes_px < 0:
+        raise ValueError(f"open_holes_px must be >= 0 or None, got {open_holes_px}")
     ranges, elevation, skip, use_skip, weights, use_weights = kernel_inputs(
         ranges, elevation, skip, weights
     )
@@ -880,6 +926,7 @@ def run_bridge(
         ranges, skip, use_skip, cos_t, sin_t, float(threshold_m),
         float(np.sin(np.radians(gamma_deg))), int(reach_px), int(min_size), weights, use_weights,
         attached_input(attached), bool(fixed_side_gaps), level,
+        -1 if open_holes_px is None else int(open_holes_px),
     )  # fmt: skip
     if point_pixel is None:
         return bridge_pixels(*args)
@@ -907,6 +954,9 @@ class Bridge:
         metres.
     level_supported : level links only where the node below p or the node above q continues the
         level surface too (module docstring, "Level surfaces").
+    open_holes_px : the most open holes (empty pixels without a surface at p's range in their
+        column) a sideways walk crosses, pixels; None = no limit, the default (module
+        docstring, "Open holes").
     """
 
     threshold_m: Annotated[float, Field(gt=0, description="link distance near, metres")] = 0.35
@@ -930,6 +980,9 @@ class Bridge:
     level_supported: Annotated[
         bool, Field(description="level links only where a third node continues the surface")
     ] = False
+    open_holes_px: Annotated[
+        int | None, Field(ge=0, description="most open holes a sideways walk crosses (px)")
+    ] = None
     main_param: ClassVar[str] = "threshold_m"
     sweep_range: ClassVar[tuple[float, float, float]] = (0.2, 1.0, 0.05)
     sweep_label: ClassVar[str] = "distance threshold [m]"
@@ -954,6 +1007,7 @@ class Bridge:
             self.level_cap_m,
             self.level_supported,
             image.azimuth_offset,
+            self.open_holes_px,
         )
 
 
@@ -972,6 +1026,7 @@ def bridge_labels(
     level_cap_m: float = Bridge.level_cap_m,
     level_supported: bool = Bridge.level_supported,
     azimuth_offset: np.ndarray | None = None,
+    open_holes_px: int | None = Bridge.open_holes_px,
 ) -> np.ndarray:
     """Bridge cluster labels of a range image (the graph is defined in the module docstring).
 
@@ -994,6 +1049,8 @@ def bridge_labels(
     azimuth_offset : (H,) azimuth offset of every row, radians (a pixel's azimuth is its
         column's centre plus it; :attr:`flic_cli.range_image.RangeImage.azimuth_offset`);
         None = zeros.
+    open_holes_px : the most open holes a sideways walk crosses (module docstring, "Open
+        holes"), pixels; None = no limit.
 
     Returns
     -------
@@ -1003,5 +1060,5 @@ def bridge_labels(
     return run_bridge(
         ranges, elevation, threshold_m, gamma_deg, reach_px, min_size, skip, weights, None, None,
         fixed_side_gaps, level_tolerance, level_margin, level_cap_m, level_supported,
-        azimuth_offset,
+        azimuth_offset, open_holes_px,
     )  # fmt: skip
