@@ -283,7 +283,7 @@ print(",".join(["bridge", *tomllib.load(open(sys.argv[1], "rb"))["methods"]]))' 
     for set in "cases:$BC:$VARIANTS,flic0,bogoslavskyi:no-ground" \
       "kitti:$DATA:$VARIANTS:both" \
       "sample0:$TMP/sample-seed0/semantickitti:$VARIANTS,flic0,bogoslavskyi:both" \
-      "sample1:$TMP/sample-seed1/semantickitti:bridge,bridge-side-gaps,flic0,bogoslavskyi:both"; do
+      "sample1:$TMP/sample-seed1/semantickitti:$VARIANTS,flic0,bogoslavskyi:both"; do
       IFS=: read -r name data methods setting <<< "$set"
       out=results/bridge-cases/$name
       fresh "$out"
