@@ -46,7 +46,7 @@ list_steps() {
   cat <<'LIST'
 bench             results/benchmark/{synthetic-moosmann,kitti-as-moosmann,semantickitti}*    quiet machine
 repeats           results/benchmark/repeats/                                               quiet machine
-revisions         results/benchmark/revisions/ (BEFORE=3e00d28 against AFTER=HEAD)         network or pip cache
+revisions         results/benchmark/revisions/ (BEFORE=3e00d28 against AFTER=HEAD)         network or pip cache, quiet machine
 evaluate          results/evaluate/                                                        -
 ground            results/ground/{evaluate-*,table,gap_intervals_column,oracle*,losses_*,pixel_heights,ground_masks*}  -
 synthetic         results/ground/evaluate-column-synthetic-seed7/, gap_intervals_column_synthetic_seed7.csv  -
@@ -168,6 +168,20 @@ for step in $STEPS; do
     python scripts/benchmark_revisions.py "${AFTER:-HEAD}" "${AFTER:-HEAD}" --data "$L200/moosmann" \
       --rounds 4 --cpu "${CPU:-1}" --work "$TMP/revisions" \
       --out results/benchmark/revisions/synthetic-moosmann-aa
+    # the methods alone, interleaved in one run (finer than flic benchmark): kernels.txt
+    base=$TMP/revisions/$(git rev-parse --short=12 "${BEFORE:-3e00d28}")
+    maps=$(python -c 'print([[k, k] for k in range(2, 16)])')
+    {
+      for spec in "flic_cli.methods.bogoslavskyi:Bogoslavskyi:{}" "flic_cli.methods.flic:Flic:{}" \
+        "flic_cli.methods.flic:Flic:{\"maps\": $maps}" "flic_cli.methods.bridge:Bridge:{}"; do
+        IFS=: read -r module cls params <<< "$spec"
+        echo "# python scripts/kernel_revisions.py --data $DATA --method $module:$cls --params '$params' --rounds 20 --repeat 3 --cpu ${CPU:-1} before=$base after=. after2=."
+        python scripts/kernel_revisions.py --data "$DATA" --method "$module:$cls" \
+          --params "$params" --rounds 20 --repeat 3 --cpu "${CPU:-1}" \
+          before="$base" after=. after2=.
+      done
+    } > "$TMP/kernels.txt"
+    mv "$TMP/kernels.txt" results/benchmark/revisions/kernels.txt
     ;;
   evaluate)
     # Table 1 (both settings, the paper's ground extraction), panoptic quality with oracle
