@@ -11,7 +11,10 @@
 # for scripts/bogoslavskyi_fidelity.py.
 #
 # Needs g++, OpenCV 4 (pkg-config opencv4), Boost (filesystem, regex) and Eigen 3 headers, e.g.
-# apt-get install g++ libopencv-dev libboost-filesystem-dev libboost-regex-dev libeigen3-dev.
+# apt-get install g++ libopencv-dev libboost-filesystem-dev libboost-regex-dev libeigen3-dev,
+# and the en_US.UTF-8 locale, which their folder reader sets (without it their code aborts:
+# "locale::facet::_S_create_c_locale name not valid"; apt-get install locales, then enable it
+# in /etc/locale.gen and run locale-gen).
 # Prints frame,ground_and_clustering_us,clustering_us (median of REPEAT calls per frame).
 set -euo pipefail
 dc=$(realpath "$1") log=$(realpath "$2") repeat=${3:-3}
