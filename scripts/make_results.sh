@@ -361,6 +361,9 @@ print(",".join(["bridge", *tomllib.load(open(sys.argv[1], "rb"))["methods"]]))' 
     # the shared sensor recordings: results/sensors/README.md
     python scripts/sensors/check_formats.py --out results/sensors/formats_check.csv
     python scripts/sensors/read_timing.py --repeat 200 --out results/sensors/read_timing.csv
+    # the ASCII PCD parsers side by side; PYARROW=<a pip --target folder with pyarrow> adds its
+    # rows (pyarrow is no dependency of flic)
+    PYTHONPATH=${PYARROW:-} python scripts/sensors/ascii_parsers.py --repeat 100 --core 1
     os2=$SENSORS/ouster/OS-2-128-U1_v2.3.0_1024x10.pcap
     fresh results/sensors/benchmark_os2_128
     taskset -c 0 flic benchmark "$os2" --methods flic0,flic14,bridge,bogoslavskyi --repeat 50 \
