@@ -169,7 +169,7 @@ for step in $STEPS; do
       --rounds 4 --cpu "${CPU:-1}" --work "$TMP/revisions" \
       --out results/benchmark/revisions/synthetic-moosmann-aa
     # the methods alone, interleaved in one run (finer than flic benchmark): kernels.txt
-    base=$TMP/revisions/$(git rev-parse --short=12 "${BEFORE:-3e00d28}")
+    base=$TMP/revisions/$(git rev-parse "${BEFORE:-3e00d28}" | cut -c1-12)  # benchmark_revisions.py's worktree
     maps=$(python -c 'print([[k, k] for k in range(2, 16)])')
     {
       for spec in "flic_cli.methods.bogoslavskyi:Bogoslavskyi:{}" "flic_cli.methods.flic:Flic:{}" \

@@ -399,16 +399,22 @@ def _two_people_image(distance_m: float, gap_m: float):
     return ranges.astype(np.float32), elevation, instance
 
 
+def assert_people_whole(labels, instance, apart):
+    """Each of the two people (instance 1, 2) is one cluster of more than 40 pixels; they are two
+    clusters when ``apart``, else one."""
+    a, b = labels[instance == 1], labels[instance == 2]
+    assert a.size > 40 and b.size > 40
+    la, lb = np.bincount(a).argmax(), np.bincount(b).argmax()
+    assert la > 0 and lb > 0 and (a == la).all() and (b == lb).all()
+    assert (la != lb) == apart
+
+
 @pytest.mark.parametrize("distance_m", [20.0, 25.0])
 def test_two_people_half_a_metre_apart_far_away_are_two_clusters(distance_m):
     ranges, elevation, instance = _two_people_image(distance_m, 0.5)
     for fixed, apart in ((True, True), (False, False)):  # the rule before joined them
         labels = bridge_labels(ranges, elevation, min_size=10, fixed_side_gaps=fixed)
-        a, b = labels[instance == 1], labels[instance == 2]
-        assert a.size > 40 and b.size > 40
-        la, lb = np.bincount(a).argmax(), np.bincount(b).argmax()
-        assert la > 0 and lb > 0 and (a == la).all() and (b == lb).all()
-        assert (la != lb) == apart
+        assert_people_whole(labels, instance, apart)
 
 
 def test_a_hole_in_a_surface_is_still_bridged_at_the_far_link_distance():
@@ -449,10 +455,7 @@ def test_open_holes_keep_two_people_apart_with_nothing_behind_them(distance_m):
     ranges, elevation, instance = _two_people_image(distance_m, 0.5)
     for open_holes, apart in ((3, True), (None, False)):
         labels = bridge_labels(ranges, elevation, min_size=10, open_holes_px=open_holes)
-        a, b = labels[instance == 1], labels[instance == 2]
-        la, lb = np.bincount(a).argmax(), np.bincount(b).argmax()
-        assert la > 0 and lb > 0 and (a == la).all() and (b == lb).all()
-        assert (la != lb) == apart
+        assert_people_whole(labels, instance, apart)
 
 
 def test_a_hole_that_its_surface_closes_is_bridged_with_open_holes_limited():
