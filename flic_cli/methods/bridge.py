@@ -108,9 +108,9 @@ else an *open* hole (between two people with the ground removed below and the fa
 above). With ``open_holes_px = n`` a walk that has passed more than ``n`` open holes stops;
 closed holes and nearer occluders do not count, and the up walk is not limited. Unlike
 ``fixed_side_gaps`` it does not ask for a farther return in the hole's column, so it also
-splits people with nothing behind them; unlike a shorter ``reach_px`` or a smaller ``gamma_deg``
-for the sideways walks (both measured, both cost the shared frames 1-6 points), it leaves the
-far link distance on surfaces and over holes that the surface closes as it is.
+splits people with nothing behind them; unlike a smaller ``gamma_deg`` or a shorter ``reach_px``
+(results/sweep/bridge/: 1.5 deg or 4 pixels cost the shared frames 2.5 and 3.8 points), it
+leaves the far link distance on surfaces and over holes that the surface closes as it is.
 """
 
 from __future__ import annotations
