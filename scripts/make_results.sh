@@ -398,35 +398,36 @@ PY
     rm -rf "$tmp"
     ;;
   sensors-synthetic)
-    # the synthetic streets as each sensor profile sees them: results/sensors-synthetic/README.md
+    # the synthetic street as each sensor profile sees them: results/sensors-synthetic/README.md.
+    # The two configs it reads stay; everything it writes is rewritten whole.
     out=results/sensors-synthetic
+    keep "$out" README.md bridge-defaults.toml sweep-bridge
+    keep "$out/sweep-bridge" bridge-sweep.toml
+    # every method on 10 frames of every profile; the VLP-16 also with Bridge's HDL-64E values
     python scripts/sensors_synthetic.py --frames 10 --out "$out" --work "$TMP/sensors" \
       --sensors vlp32c,hdl32e,hdl64e,os1-64,os1-128,os2-128
     python scripts/sensors_synthetic.py --frames 10 --out "$out" --work "$TMP/sensors" \
       --sensors vlp16 --extra-config "$out/bridge-defaults.toml" \
       --methods bogoslavskyi,flic0,flic1,flic6,flic14,flic1n,flic6n,flic14n,bridge,bridge-defaults,dbscan
     python scripts/sensor_links.py --work "$TMP/sensors" --frames 10 --out "$out/vertical_links.csv"
+    # Bridge's grid on the two sparsest profiles: what its derived values rest on
     variants=$(python -c "import tomllib; print(','.join(tomllib.load(open('$out/sweep-bridge/bridge-sweep.toml', 'rb'))['methods']))")
     python scripts/sensors_synthetic.py --frames 10 --sensors vlp16,hdl32e \
       --methods "bridge,$variants" --extra-config "$out/sweep-bridge/bridge-sweep.toml" \
-      --out "$out/sweep-bridge" --work "$TMP/sensors-sweep"
-    python scripts/sensors_synthetic.py --frames 20 --sensors vlp16 \
-      --methods flic0,flic14,bridge,bridge-defaults,dbscan --extra-config "$out/bridge-defaults.toml" \
-      --out "$out/vlp16-20frames" --work "$TMP/sensors-20"
+      --out "$out/sweep-bridge" --work "$TMP/sensors"
+    # the ground setting with flic's own remover
     python scripts/sensors_synthetic.py --frames 10 --methods flic0,flic14,bridge \
-      --ground-remover column --out "$out/ground-column" --work "$TMP/sensors-gc"
-    python scripts/sensors_synthetic.py --frames 20 --methods bridge,dbscan \
-      --sensors vlp32c,hdl32e,os1-64,hdl64e,os2-128,os1-128 \
-      --out "$out/bridge-dbscan-20frames" --work "$TMP/sensors-bd20"
-    # since the runs derive the sensor-dependent parameters from the data (docs/sensors.md)
+      --ground-remover column --out "$out/ground-column" --work "$TMP/sensors"
+    # 20 frames: the paired table (summary.csv), column's run limits, the MCs in degrees
     python scripts/sensors_synthetic.py --frames 20 --methods flic0,flic1,flic6,flic14,bridge,dbscan \
-      --out "$out/derived-20frames" --work "$TMP/sensors-s20e"
-    python scripts/sensors_ground_column.py --frames 20 --work "$TMP/sensors-s20" \
+      --out "$out/derived-20frames" --work "$TMP/sensors-20"
+    python scripts/sensors_ground_column.py --frames 20 --work "$TMP/sensors-20" \
       --out "$out/ground-column/before_after.csv"
-    python scripts/sensors_mc_degrees.py --frames 20 --work "$TMP/sensors-s20" \
+    python scripts/sensors_mc_degrees.py --frames 20 --work "$TMP/sensors-20" \
       --out "$out/mc-degrees"
-    python scripts/sensor_links.py --work "$TMP/sensors-s20" --frames 20 \
+    python scripts/sensor_links.py --work "$TMP/sensors-20" --frames 20 \
       --out "$TMP/vertical_links20.csv" --mc "$out/mc_links.csv"
+    # what every shared recording derives
     python scripts/sensor_params_recordings.py
     ;;
   bags)
