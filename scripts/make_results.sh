@@ -459,6 +459,16 @@ from bagtools import cycled_vlp16_bag; cycled_vlp16_bag(Path('../shared/data'), 
     sample "$TMP/sample-seed0" 20 0
     bash scripts/peers_sweeps.sh "$DATA" "$TMP/sample-seed0/semantickitti"
     bash scripts/peers_sweeps_rest.sh "$DATA" "$TMP/sample-seed0/semantickitti" "$JOBS"
+    # ALPINE's k, with and without box splitting (docs/peers.md)
+    variants=alpine,alpine-nosplit,alpine-k32,alpine-k32-nosplit,alpine-k64,alpine-k64-nosplit
+    fresh results/peers/alpine-k
+    for name in kitti sample0; do
+      data=$DATA
+      [ "$name" = sample0 ] && data=$TMP/sample-seed0/semantickitti
+      flic evaluate "$data" --config configs/alpine-k.toml --setting no-ground --methods "$variants" \
+        --jobs "$JOBS" --out "results/peers/alpine-k/$name"
+      keep "results/peers/alpine-k/$name" table.csv by_class.csv run.json
+    done
     ;;
   peers-fidelity)
     if [ -z "${FLIC_REF:-}" ]; then

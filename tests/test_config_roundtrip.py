@@ -28,3 +28,28 @@ def test_flic_config_prints_toml_that_loads_back_to_the_same_config(
     path = tmp_path / "effective.toml"
     path.write_text(out)
     assert load_config(path).as_dict() == load_config(None).as_dict()
+
+
+PRESETS = sorted((Path(__file__).resolve().parents[1] / "configs").glob("*.toml"))
+
+
+@pytest.mark.parametrize("path", PRESETS, ids=[p.name for p in PRESETS])
+def test_every_shipped_config_loads_and_builds_the_variants_its_commands_name(path: Path) -> None:
+    """The configs under configs/ (the ones results/ cite) load, every variant they define
+    builds in both settings, and every name their comments' ``--methods`` lists is a variant."""
+    import re
+
+    from flic_cli.runs.pipeline import OWN, build_segmenter
+
+    config = load_config(path)
+    defined = set(tomllib.loads(path.read_text()).get("methods", {}))
+    for name in defined:
+        for setting in ("no-ground", "ground"):
+            assert build_segmenter(config, name, setting, OWN).name == name
+    named = {
+        n
+        for listing in re.findall(r"--methods[ =]([\w,.-]+)", path.read_text())
+        for n in listing.split(",")
+        if n and n != "..."
+    }
+    assert named <= set(config.methods), named - set(config.methods)
