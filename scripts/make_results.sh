@@ -203,20 +203,20 @@ for step in $STEPS; do
         --runtimes results/benchmark/semantickitti --out "results/ground/evaluate-$remover"
       rm -rf "results/ground/evaluate-$remover/parts"
     done
-    python scripts/ground_table.py "$DATA" --evaluate paper=results/evaluate \
+    python scripts/ground_study.py table "$DATA" --evaluate paper=results/evaluate \
       --evaluate bogoslavskyi=results/ground/evaluate-bogoslavskyi \
       --evaluate column=results/ground/evaluate-column \
       --evaluate patchworkpp=results/ground/evaluate-patchworkpp --out results/ground/table.csv
     python scripts/paired_differences.py results/ground/evaluate-column --settings \
       --out results/ground/gap_intervals_column.csv
-    python scripts/ground_oracle.py "$DATA" --methods "$GROUND_METHODS" \
+    python scripts/ground_study.py oracle "$DATA" --methods "$GROUND_METHODS" \
       --out results/ground/oracle.csv --counts
     for m in flic0 flic14 bridge dbscan; do
-      python scripts/ground_losses.py "$DATA" --method "$m" --remover column \
+      python scripts/ground_study.py losses "$DATA" --method "$m" --remover column \
         --out "results/ground/losses_$m"
     done
-    python scripts/pixel_heights.py "$DATA" --out results/ground/pixel_heights.csv
-    python scripts/ground_figure.py "$DATA" --sequence 08 --frame 0 \
+    python scripts/ground_study.py heights "$DATA" --out results/ground/pixel_heights.csv
+    python scripts/ground_study.py figure "$DATA" --sequence 08 --frame 0 \
       --out results/ground/ground_masks_08_000000.png
     ;;
   synthetic)
@@ -234,23 +234,23 @@ for step in $STEPS; do
     ;;
   ground-sweep)
     # column's parameters, one at a time around the defaults (shared frames + 20 synthetic)
-    python scripts/ground_sweep.py "$DATA" --params \
+    python scripts/ground_study.py sweep "$DATA" --params \
       neighbour_px,neighbour_band_m,foot_deg,under_m,face_deg,base_band_m,point_heights,hidden_points \
       --methods "$GROUND_METHODS" --out results/ground/sweep_column_neighbours.csv
-    python scripts/ground_sweep.py "$DATA" --params hold_feet,attach_m \
+    python scripts/ground_study.py sweep "$DATA" --params hold_feet,attach_m \
       --methods "$GROUND_METHODS" --out results/ground/sweep_column_hold.csv
-    python scripts/ground_sweep.py "$DATA" --out results/ground/sweep_column.csv \
+    python scripts/ground_study.py sweep "$DATA" --out results/ground/sweep_column.csv \
       --params noise_m,slope_change_deg,kerb_m,max_step_m,flat_deg,seed_tolerance_m,base_band_m \
       --methods flic0,flic6,flic14
     ;;
   ground-speed)
     # the removers alone, interleaved
     kitti_log
-    python scripts/ground_speed.py "$DATA" --removers column,paper,bogoslavskyi,patchworkpp \
+    python scripts/ground_study.py speed "$DATA" --removers column,paper,bogoslavskyi,patchworkpp \
       --rounds 3 --out results/ground/speed_per_point_semantickitti.csv
-    python scripts/ground_speed.py "$KLOG" --removers column,paper,bogoslavskyi,patchworkpp \
+    python scripts/ground_study.py speed "$KLOG" --removers column,paper,bogoslavskyi,patchworkpp \
       --rounds 5 --out results/ground/speed_per_point_kitti-as-moosmann.csv
-    python scripts/ground_speed.py "$DATA" \
+    python scripts/ground_study.py speed "$DATA" \
       --removers column,column:hidden_points=False,paper,patchworkpp --rounds 3 \
       --out results/ground/speed_per_point_without_step7_semantickitti.csv
     ;;
@@ -311,14 +311,14 @@ print(",".join(["bridge", *tomllib.load(open(sys.argv[1], "rb"))["methods"]]))' 
       keep "$out" table.csv by_class.csv by_distance.csv paired.csv
     done
     cp "$BC/cases.csv" results/bridge-cases/cases/objects.csv
-    # Bridge with the removed ground's returns seen as free space (ground_oracle.py's "labels,
+    # Bridge with the removed ground's returns seen as free space (scripts/ground_study.py oracle's "labels,
     # per point" row against the no-ground setting), on the scenes and three samples
     sample "$TMP/sample-seed7" 60 7
     for set in "cases:$BC" "sample0:$TMP/sample-seed0/semantickitti" \
       "sample1:$TMP/sample-seed1/semantickitti" "sample7:$TMP/sample-seed7/semantickitti"; do
       name=${set%%:*} data=${set#*:}
       mkdir -p "results/bridge-cases/$name"
-      python scripts/ground_oracle.py "$data" --methods bridge,flic0 \
+      python scripts/ground_study.py oracle "$data" --methods bridge,flic0 \
         --out "results/bridge-cases/$name/ground_seen.csv"
     done
     # speed: every variant with its ground extraction, interleaved (quiet machine)
@@ -457,8 +457,7 @@ from bagtools import cycled_vlp16_bag; cycled_vlp16_bag(Path('../shared/data'), 
     # docs/peers.md, results/peers/sweeps/README.md
     bash scripts/peers_which_clusterer.sh "$DATA" results/peers "$JOBS"
     sample "$TMP/sample-seed0" 20 0
-    bash scripts/peers_sweeps.sh "$DATA" "$TMP/sample-seed0/semantickitti"
-    bash scripts/peers_sweeps_rest.sh "$DATA" "$TMP/sample-seed0/semantickitti" "$JOBS"
+    bash scripts/peers_sweeps.sh "$DATA" "$TMP/sample-seed0/semantickitti" "$JOBS"
     # ALPINE's k, with and without box splitting (docs/peers.md)
     variants=alpine,alpine-nosplit,alpine-k32,alpine-k32-nosplit,alpine-k64,alpine-k64-nosplit
     fresh results/peers/alpine-k

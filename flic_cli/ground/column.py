@@ -90,7 +90,7 @@ steps, seeds and the foot test), so the cost is linear in the image size. The im
 wrapped at its left and right edges.
 
 Parameters (see :class:`ColumnGround`) were chosen by the sweep in ``results/ground/`` on the
-shared SemanticKITTI frames and the synthetic sample (``scripts/ground_sweep.py``).
+shared SemanticKITTI frames and the synthetic sample (``scripts/ground_study.py sweep``).
 """
 
 from __future__ import annotations
@@ -628,7 +628,7 @@ def pixel_geometry(image: RangeImage, exact: bool = True) -> tuple[np.ndarray, .
     nearest point: its row's elevation is only the median of its beam's, and the beams of a real
     sensor do not share one origin (on the shared SemanticKITTI frames a ground pixel's height
     along its row's elevation is off by more than 3 cm for half of them, 1st-99th percentile
-    -21..+12 cm; ``scripts/pixel_heights.py``), as much as the remover's bands of 3-8 cm. A
+    -21..+12 cm; ``scripts/ground_study.py heights``), as much as the remover's bands of 3-8 cm. A
     sensor's own image, or ``exact`` False: every pixel's range along its row's elevation.
     """
     h, w = image.shape
