@@ -22,6 +22,7 @@ import argparse
 import ast
 import dataclasses
 import gc
+import inspect
 import tempfile
 import time
 from collections.abc import Callable
@@ -731,7 +732,7 @@ def main(argv: list[str] | None = None) -> None:
         p = studies.add_parser(
             name,
             help=doc.splitlines()[0],
-            description=doc,
+            description=inspect.cleandoc(doc),
             formatter_class=argparse.RawDescriptionHelpFormatter,
         )
         p.add_argument("data", nargs="?", default=SHARED, type=Path, help=f"default {SHARED}")

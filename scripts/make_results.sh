@@ -404,31 +404,31 @@ PY
     keep "$out" README.md bridge-defaults.toml sweep-bridge
     keep "$out/sweep-bridge" bridge-sweep.toml
     # every method on 10 frames of every profile; the VLP-16 also with Bridge's HDL-64E values
-    python scripts/sensors_synthetic.py --frames 10 --out "$out" --work "$TMP/sensors" \
+    python scripts/sensors_study.py profiles --frames 10 --out "$out" --work "$TMP/sensors" \
       --sensors vlp32c,hdl32e,hdl64e,os1-64,os1-128,os2-128
-    python scripts/sensors_synthetic.py --frames 10 --out "$out" --work "$TMP/sensors" \
+    python scripts/sensors_study.py profiles --frames 10 --out "$out" --work "$TMP/sensors" \
       --sensors vlp16 --extra-config "$out/bridge-defaults.toml" \
       --methods bogoslavskyi,flic0,flic1,flic6,flic14,flic1n,flic6n,flic14n,bridge,bridge-defaults,dbscan
-    python scripts/sensor_links.py --work "$TMP/sensors" --frames 10 --out "$out/vertical_links.csv"
+    python scripts/sensors_study.py links --work "$TMP/sensors" --frames 10 --out "$out/vertical_links.csv"
     # Bridge's grid on the two sparsest profiles: what its derived values rest on
     variants=$(python -c "import tomllib; print(','.join(tomllib.load(open('$out/sweep-bridge/bridge-sweep.toml', 'rb'))['methods']))")
-    python scripts/sensors_synthetic.py --frames 10 --sensors vlp16,hdl32e \
+    python scripts/sensors_study.py profiles --frames 10 --sensors vlp16,hdl32e \
       --methods "bridge,$variants" --extra-config "$out/sweep-bridge/bridge-sweep.toml" \
       --out "$out/sweep-bridge" --work "$TMP/sensors"
     # the ground setting with flic's own remover
-    python scripts/sensors_synthetic.py --frames 10 --methods flic0,flic14,bridge \
+    python scripts/sensors_study.py profiles --frames 10 --methods flic0,flic14,bridge \
       --ground-remover column --out "$out/ground-column" --work "$TMP/sensors"
     # 20 frames: the paired table (summary.csv), column's run limits, the MCs in degrees
-    python scripts/sensors_synthetic.py --frames 20 --methods flic0,flic1,flic6,flic14,bridge,dbscan \
+    python scripts/sensors_study.py profiles --frames 20 --methods flic0,flic1,flic6,flic14,bridge,dbscan \
       --out "$out/derived-20frames" --work "$TMP/sensors-20"
-    python scripts/sensors_ground_column.py --frames 20 --work "$TMP/sensors-20" \
+    python scripts/sensors_study.py ground-column --frames 20 --work "$TMP/sensors-20" \
       --out "$out/ground-column/before_after.csv"
-    python scripts/sensors_mc_degrees.py --frames 20 --work "$TMP/sensors-20" \
+    python scripts/sensors_study.py mc-degrees --frames 20 --work "$TMP/sensors-20" \
       --out "$out/mc-degrees"
-    python scripts/sensor_links.py --work "$TMP/sensors-20" --frames 20 \
+    python scripts/sensors_study.py links --work "$TMP/sensors-20" --frames 20 \
       --out "$TMP/vertical_links20.csv" --mc "$out/mc_links.csv"
     # what every shared recording derives
-    python scripts/sensor_params_recordings.py
+    python scripts/sensors_study.py recordings
     ;;
   bags)
     # ROS bags: docs/ros.md
