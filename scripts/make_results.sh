@@ -408,7 +408,7 @@ PY
       --sensors vlp32c,hdl32e,hdl64e,os1-64,os1-128,os2-128
     python scripts/sensors_study.py profiles --frames 10 --out "$out" --work "$TMP/sensors" \
       --sensors vlp16 --extra-config "$out/bridge-defaults.toml" \
-      --methods bogoslavskyi,flic0,flic1,flic6,flic14,flic1n,flic6n,flic14n,bridge,bridge-defaults,dbscan
+      --methods bogoslavskyi,flic0,flic1,flic6,flic14,flic1n,flic6n,flic14n,bridge,bridge-defaults,dbscan,euclidean,slr,cvc,alpine-agnostic
     python scripts/sensors_study.py links --work "$TMP/sensors" --frames 10 --out "$out/vertical_links.csv"
     # Bridge's grid on the two sparsest profiles: what its derived values rest on
     variants=$(python -c "import tomllib; print(','.join(tomllib.load(open('$out/sweep-bridge/bridge-sweep.toml', 'rb'))['methods']))")
