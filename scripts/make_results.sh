@@ -63,7 +63,7 @@ profile           results/profile/                                              
 sensors           results/sensors/ (but ouster_sdk_comparison.csv)                         ../shared/data/sensors
 sensors-synthetic results/sensors-synthetic/                                               -
 bags              results/bags/                                                            -
-peers             results/peers/{evaluate,which_clusterer,sweeps}/                         -
+peers             results/peers/{evaluate,benchmark,which_clusterer,sweeps,alpine-k}/      -
 cpp               results/benchmark/cpp-comparison*/, results/ground/bogoslavskyi_fidelity*.csv  DC=depth_clustering
 panoptic          results/panoptic/ (but README.md)                                        SKAPI=semantic-kitti-api
 ouster-sdk        results/sensors/ouster_sdk_comparison.csv                                OUSTER_PY=python with ouster-sdk
