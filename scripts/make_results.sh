@@ -474,11 +474,11 @@ from bagtools import cycled_vlp16_bag; cycled_vlp16_bag(Path('../shared/data'), 
       skip "set FLIC_REF to the references built by scripts/peers_fidelity.sh"
       continue
     fi
-    python scripts/peers_fidelity.py "$DATA" results/peers/fidelity
-    python scripts/peers_ref_diff.py "$DATA" > results/peers/fidelity/ref_diff.txt
-    python scripts/peers_euclidean_fidelity.py "$DATA" results/peers/fidelity \
+    python scripts/peers_study.py clusterers "$DATA" results/peers/fidelity
+    python scripts/peers_study.py ref-diff "$DATA" > results/peers/fidelity/ref_diff.txt
+    python scripts/peers_study.py euclidean "$DATA" results/peers/fidelity \
       "$TMP/sample-seed0/semantickitti" 3
-    python scripts/peers_ref_ablation.py "$DATA" results/peers/fidelity --every 5
+    python scripts/peers_study.py ablation "$DATA" results/peers/fidelity --every 5
     ;;
   cpp)
     # their C++ against flic, alternating in one session, on both logs; their ground masks

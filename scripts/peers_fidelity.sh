@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# How the references of scripts/peers_fidelity.py were obtained and built, outside flic, under
+# How the references of scripts/peers_study.py were obtained and built, outside flic, under
 # /work/ref/ (nothing of theirs is copied into flic). Debian 12, 2 shared cores.
 #   valeoai/Alpine                      (pure Python, MIT): used from its clone
 #   xmba15/curved_voxel_clustering      (C++, PCL): its library + scripts/peers_ref/cvc_driver.cpp
@@ -27,5 +27,5 @@ mkdir -p "$ref/build_euclidean"
 g++ -O3 -std=c++17 -I/usr/include/pcl-1.13 -I/usr/include/eigen3 "$here/peers_ref/euclidean_driver.cpp" \
   -o "$ref/build_euclidean/euclidean_driver" -lpcl_common -lpcl_search -lpcl_kdtree -lpcl_segmentation
 # then, from the project root:
-#   python scripts/peers_fidelity.py ../shared/data/semantickitti results/peers/fidelity
-#   python scripts/peers_ref_diff.py ../shared/data/semantickitti > results/peers/fidelity/ref_diff.txt
+#   python scripts/peers_study.py clusterers ../shared/data/semantickitti results/peers/fidelity
+#   python scripts/peers_study.py ref-diff ../shared/data/semantickitti > results/peers/fidelity/ref_diff.txt

@@ -1,7 +1,7 @@
 // Runs xmba15/curved_voxel_clustering (built outside flic, /work/ref/) on float32 xyz files and
 // writes one int32 label per point (-1: the reference's unclustered points) and the time.
 // Build: see scripts/peers_fidelity.sh. Usage: cvc_driver IN.xyz OUT.labels [NUM_MIN_POINTS]
-// (NUM_MIN_POINTS: the library's numMinPoints, default its own, 3; scripts/peers_ref_ablation.py)
+// (NUM_MIN_POINTS: the library's numMinPoints, default its own, 3; scripts/peers_study.py ablation)
 #include <cstdlib>
 #include <chrono>
 #include <cstdio>
