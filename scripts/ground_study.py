@@ -22,14 +22,13 @@ import argparse
 import ast
 import dataclasses
 import gc
-import inspect
 import tempfile
 import time
-from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
+from _studies import Studies, run_studies  # scripts/_studies.py
 from numba import njit
 from tqdm import tqdm
 
@@ -711,7 +710,7 @@ def _figure_arguments(p: argparse.ArgumentParser) -> None:
 
 # ---- the command line --------------------------------------------------------------------------
 
-STUDIES: dict[str, tuple[Callable[[argparse.Namespace], None], Callable]] = {
+STUDIES: Studies = {
     "table": (table, _table_arguments),
     "speed": (speed, _speed_arguments),
     "sweep": (sweep, _sweep_arguments),
@@ -722,24 +721,12 @@ STUDIES: dict[str, tuple[Callable[[argparse.Namespace], None], Callable]] = {
 }
 
 
+def _data_argument(p: argparse.ArgumentParser) -> None:
+    p.add_argument("data", nargs="?", default=SHARED, type=Path, help=f"default {SHARED}")
+
+
 def main(argv: list[str] | None = None) -> None:
-    parser = argparse.ArgumentParser(
-        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
-    )
-    studies = parser.add_subparsers(dest="study", required=True, metavar="STUDY")
-    for name, (run, add_arguments) in STUDIES.items():
-        doc = run.__doc__ or ""
-        p = studies.add_parser(
-            name,
-            help=doc.splitlines()[0],
-            description=inspect.cleandoc(doc),
-            formatter_class=argparse.RawDescriptionHelpFormatter,
-        )
-        p.add_argument("data", nargs="?", default=SHARED, type=Path, help=f"default {SHARED}")
-        add_arguments(p)
-        p.set_defaults(run=run)
-    args = parser.parse_args(argv)
-    args.run(args)
+    run_studies(__doc__, STUDIES, argv, common=_data_argument)
 
 
 if __name__ == "__main__":

@@ -24,17 +24,16 @@ for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "NUMB
 
 import argparse  # noqa: E402
 import importlib.util  # noqa: E402
-import inspect  # noqa: E402
 import subprocess  # noqa: E402
 import sys  # noqa: E402
 import sysconfig  # noqa: E402
 import tempfile  # noqa: E402
 import time  # noqa: E402
-from collections.abc import Callable  # noqa: E402
 from pathlib import Path  # noqa: E402
 
 import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
+from _studies import Studies, run_studies  # noqa: E402  # scripts/_studies.py
 from scipy.sparse import coo_matrix  # noqa: E402
 from scipy.sparse.csgraph import connected_components  # noqa: E402
 from scipy.spatial import cKDTree  # noqa: E402
@@ -613,7 +612,7 @@ def _ablation_arguments(p: argparse.ArgumentParser) -> None:
 
 # ---- the command line --------------------------------------------------------------------------
 
-STUDIES: dict[str, tuple[Callable[[argparse.Namespace], None], Callable]] = {
+STUDIES: Studies = {
     "clusterers": (clusterers, _clusterers_arguments),
     "ref-diff": (ref_diff, _ref_diff_arguments),
     "euclidean": (euclidean, _euclidean_arguments),
@@ -622,22 +621,7 @@ STUDIES: dict[str, tuple[Callable[[argparse.Namespace], None], Callable]] = {
 
 
 def main(argv: list[str] | None = None) -> None:
-    parser = argparse.ArgumentParser(
-        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
-    )
-    studies = parser.add_subparsers(dest="study", required=True, metavar="STUDY")
-    for name, (run, add_arguments) in STUDIES.items():
-        doc = run.__doc__ or ""
-        p = studies.add_parser(
-            name,
-            help=doc.splitlines()[0],
-            description=inspect.cleandoc(doc),
-            formatter_class=argparse.RawDescriptionHelpFormatter,
-        )
-        add_arguments(p)
-        p.set_defaults(run=run)
-    args = parser.parse_args(argv)
-    args.run(args)
+    run_studies(__doc__, STUDIES, argv)
 
 
 if __name__ == "__main__":

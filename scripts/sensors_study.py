@@ -21,15 +21,14 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
-import inspect
 import subprocess
 import sys
-from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 import tomllib
+from _studies import Studies, run_studies  # scripts/_studies.py
 
 from flic_cli.classes import ground_mask, thing_mask
 from flic_cli.config import load_config
@@ -765,7 +764,7 @@ def _recordings_arguments(p: argparse.ArgumentParser) -> None:
 
 # ---- the command line --------------------------------------------------------------------------
 
-STUDIES: dict[str, tuple[Callable[[argparse.Namespace], None], Callable]] = {
+STUDIES: Studies = {
     "profiles": (profiles, _profiles_arguments),
     "links": (links, _links_arguments),
     "ground-column": (ground_column, _ground_column_arguments),
@@ -775,22 +774,7 @@ STUDIES: dict[str, tuple[Callable[[argparse.Namespace], None], Callable]] = {
 
 
 def main(argv: list[str] | None = None) -> None:
-    parser = argparse.ArgumentParser(
-        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
-    )
-    studies = parser.add_subparsers(dest="study", required=True, metavar="STUDY")
-    for name, (run, add_arguments) in STUDIES.items():
-        doc = run.__doc__ or ""
-        p = studies.add_parser(
-            name,
-            help=doc.splitlines()[0],
-            description=inspect.cleandoc(doc),
-            formatter_class=argparse.RawDescriptionHelpFormatter,
-        )
-        add_arguments(p)
-        p.set_defaults(run=run)
-    args = parser.parse_args(argv)
-    args.run(args)
+    run_studies(__doc__, STUDIES, argv)
 
 
 if __name__ == "__main__":
