@@ -125,7 +125,7 @@ def geometry() -> pd.DataFrame:
         elev = -p.pitch_deg
         street = elev <= 3.0
         spacing = np.diff(p.pitch_deg)[street[1:]]
-        dv = float(np.median(spacing))
+        dv = street_beam_gap_deg(np.radians(elev))  # their median
         dh = p.column_step_deg
 
         def reach(step_deg: float) -> float:
