@@ -219,14 +219,14 @@ def walk_tables_offset(
     return cos_t, sin_t
 
 
-def _walk_row_kernel(options: bool) -> Callable[..., None]:
+def _walk_row_kernel(options: bool, holes: bool) -> Callable[..., None]:
     """:func:`_walk_row` compiled with the tests of ``fixed_side_gaps`` and of the level rule
-    (``options``) or without them (the default graph).
+    (``options``) or without them, with the open-holes count (``holes``) or without it.
 
-    ``options`` is a constant of the compiled code, so the default walk carries none of the
-    options' loads, stores and selects: with them compiled in but off, Bridge took 10-13 % longer
-    per SemanticKITTI frame than before the options came (measured interleaved; see
-    results/benchmark/revisions/README.md).
+    ``options`` and ``holes`` are constants of the compiled code, so a walk carries none of the
+    loads, stores and selects of the rules it does not use: with the options compiled in but off,
+    Bridge took 10-13 % longer per SemanticKITTI frame than before the options came (measured
+    interleaved; see results/benchmark/revisions/README.md).
     """
 
     @njit(cache=True)
@@ -253,7 +253,7 @@ def _walk_row_kernel(options: bool) -> Callable[..., None]:
         below: np.ndarray,
         level: LevelRule,
         max_open: int,
-        holes: np.ndarray,
+        n_open: np.ndarray,
     ) -> None:
         """The walks of row ``r`` past their first steps (module docstring); every link found
         merges two labels.
@@ -271,8 +271,9 @@ def _walk_row_kernel(options: bool) -> Callable[..., None]:
         above and below every pixel (:func:`_column_neighbours`). ``level``: the level-surface
         rule of the up walk (:func:`level_tables`, module docstring). ``max_open``: the most
         open holes a sideways walk crosses (-1 = no limit; module docstring, "Open holes"),
-        ``holes``: scratch, the open holes each walk has crossed. Without ``options``
-        (:func:`_walk_row_kernel`) ``fixed_side_gaps``, ``level`` and ``max_open`` are not read.
+        ``n_open``: scratch, the open holes each walk has crossed. Without ``options``
+        (:func:`_walk_row_kernel`) ``fixed_side_gaps`` and ``level`` are not read, without
+        ``holes`` ``max_open``.
         """
         one = np.uint64(1)
         level_on, sin_e, tan_e, spacing, level_tol, level_margin, level_cap, support = level
@@ -286,7 +287,7 @@ def _walk_row_kernel(options: bool) -> Callable[..., None]:
                 continue
             side = options & fixed_side_gaps & (di != 1)
             lv_walk = options & level_on & (di == 1)
-            limit = options & (max_open >= 0) & (di != 1)
+            limit = holes & (max_open >= 0) & (di != 1)
             row_1 = (r + dr) * w
             m = 0
             for k in range(on_w.shape[1]):
@@ -295,7 +296,7 @@ def _walk_row_kernel(options: bool) -> Callable[..., None]:
                     c = 64 * k + np.int64(trailing_zeros(bits))
                     bits &= bits - one
                     walks[m] = c
-                    if options:
+                    if options or holes:
                         c1 = c + dc
                         c1 += w if c1 < 0 else 0
                         c1 -= w if c1 >= w else 0
@@ -305,12 +306,13 @@ def _walk_row_kernel(options: bool) -> Callable[..., None]:
                         d1 = np.float64(nodes[row + c])
                         t1 = max(threshold, d1 * sin_gamma)
                         e1 = nodes[q1] <= 0.0
-                        holed[m] = side and e1 and _open_gap(above, below, q1, d1, t1)
+                        if options:
+                            holed[m] = side and e1 and _open_gap(above, below, q1, d1, t1)
                         if limit:
                             # the first step crossed an open hole (no surface at p's range in
                             # its column); a walk past more than max_open of them stops
-                            nh = 1 if e1 and not _closed(above, below, q1, d1, t1) else 0
-                            holes[m] = nh
+                            nh = np.int64(e1 & ~_closed(above, below, q1, d1, t1))
+                            n_open[m] = nh
                             if nh > max_open:
                                 continue
                     m += 1
@@ -364,10 +366,10 @@ def _walk_row_kernel(options: bool) -> Callable[..., None]:
                         holed[going] = h | og
                     over = False
                     if limit:
-                        nh = holes[t]
-                        if dq <= 0.0 and not _closed(above, below, q, d, t_far):
-                            nh += 1
-                        holes[going] = nh
+                        nh = n_open[t]
+                        if dq <= 0.0:
+                            nh += np.int64(~_closed(above, below, q, d, t_far))
+                        n_open[going] = nh
                         over = nh > max_open
                     going += 1 - np.int64(bound | linked | free | over)
                 m = going
@@ -377,9 +379,11 @@ def _walk_row_kernel(options: bool) -> Callable[..., None]:
     return walk_row
 
 
-#: The walks past the first steps: the default graph, and with the options' tests.
-_walk_row_default = _walk_row_kernel(False)
-_walk_row = _walk_row_kernel(True)
+#: The walks past the first steps: the default graph, with the open-holes count only, and with
+#: every option's tests.
+_walk_row_default = _walk_row_kernel(False, False)
+_walk_row_holes = _walk_row_kernel(False, True)
+_walk_row = _walk_row_kernel(True, True)
 
 
 #: The level-surface rule as the kernel takes it: (on, sin and |tan| of the row elevations
@@ -535,33 +539,25 @@ def _open_gap(above: np.ndarray, below: np.ndarray, q: int, d: float, tp: float)
 
 
 @njit(cache=True)
-def _column_neighbours(
-    nodes: np.ndarray, h: int, w: int, reach: int
-) -> tuple[np.ndarray, np.ndarray]:
-    """Range of the first node above and of the first node below every pixel in its column,
-    at most ``reach`` rows away (0 = none), (H * W,) float32 each (Bridge looks the whole
-    column up and down: ``reach = H``)."""
-    n = h * w
-    above = np.zeros(n, dtype=np.float32)
-    below = np.zeros(n, dtype=np.float32)
-    gap_a = np.full(w, reach + 1, dtype=np.int64)  # rows since the last node above
-    gap_b = np.full(w, reach + 1, dtype=np.int64)
-    last_a = np.zeros(w, dtype=np.float32)
-    last_b = np.zeros(w, dtype=np.float32)
+def _column_neighbours(nodes: np.ndarray, h: int, w: int) -> tuple[np.ndarray, np.ndarray]:
+    """Range of the first node above and of the first node below every pixel in its column
+    (0 = none), (H * W,) float32 each: one pass down the rows, one up."""
+    above = np.empty(h * w, dtype=np.float32)
+    below = np.empty(h * w, dtype=np.float32)
+    last = np.zeros(w, dtype=np.float32)
     for r in range(h):
         row = r * w
         for c in range(w):
-            above[row + c] = last_a[c] if gap_a[c] <= reach else np.float32(0.0)
+            above[row + c] = last[c]
             x = nodes[row + c]
-            gap_a[c] = 1 if x > 0 else gap_a[c] + 1
-            last_a[c] = x if x > 0 else last_a[c]
+            last[c] = x if x > 0 else last[c]
+    last[:] = 0.0
     for r in range(h - 1, -1, -1):
         row = r * w
         for c in range(w):
-            below[row + c] = last_b[c] if gap_b[c] <= reach else np.float32(0.0)
+            below[row + c] = last[c]
             x = nodes[row + c]
-            gap_b[c] = 1 if x > 0 else gap_b[c] + 1
-            last_b[c] = x if x > 0 else last_b[c]
+            last[c] = x if x > 0 else last[c]
     return above, below
 
 
@@ -718,7 +714,7 @@ def _bridge_components(
         for r in range(h):
             _fill_row(nodes[r * w : (r + 1) * w], node, rf, sf, use_skip, r * w, w)
     if fixed_side_gaps or max_open >= 0:
-        col_above, col_below = _column_neighbours(nodes, h, w, h)
+        col_above, col_below = _column_neighbours(nodes, h, w)
     else:
         col_above = col_below = np.zeros(1, dtype=np.float32)
     for r in range(h):
@@ -813,8 +809,14 @@ def _bridge_components(
                     union(parent, labels[row + c], labels[j])
         pack(left_on[: 64 * nw], on_w[0])
         pack(up_on[: 64 * nw], on_w[1])
-        if options:
+        if fixed_side_gaps or level[0]:
             _walk_row(
+                r, w, on_w, nodes, rf, labels, parent, cos_t, sin_t, threshold, sin_gamma,
+                k_row, k_up, walks, link_c, link_q, holed, fixed_side_gaps, col_above, col_below,
+                level, max_open, holes,
+            )  # fmt: skip
+        elif max_open >= 0:
+            _walk_row_holes(
                 r, w, on_w, nodes, rf, labels, parent, cos_t, sin_t, threshold, sin_gamma,
                 k_row, k_up, walks, link_c, link_q, holed, fixed_side_gaps, col_above, col_below,
                 level, max_open, holes,
