@@ -302,7 +302,7 @@ print(",".join(["bridge", *tomllib.load(open(sys.argv[1], "rb"))["methods"]]))' 
       out=results/bridge-cases/$name
       fresh "$out"
       flic evaluate "$data" --config configs/bridge-cases.toml --methods "$methods" \
-        --setting "$setting" --ground-remover column --jobs "$JOBS" --out "$out"
+        --setting "$setting" --ground-remover column --semantics oracle --jobs "$JOBS" --out "$out"
       python scripts/paired_differences.py "$out" --out "$out/paired.csv"
       # the mean IoU per case, spacing and range (reads per_object.csv)
       if [ "$name" = cases ]; then
@@ -311,6 +311,14 @@ print(",".join(["bridge", *tomllib.load(open(sys.argv[1], "rb"))["methods"]]))' 
       keep "$out" table.csv by_class.csv by_distance.csv paired.csv
     done
     cp "$BC/cases.csv" results/bridge-cases/cases/objects.csv
+    # the open-holes variants on every sensor profile's street (seed 0, 10 frames), as in step
+    # sensors-synthetic (whose other methods' figures they sit beside)
+    fresh results/bridge-cases/profiles
+    python scripts/sensors_study.py profiles --frames 10 --out results/bridge-cases/profiles \
+      --work "$TMP/bridge-cases-sensors" --methods bridge,bridge-open3,bridge-open4,bridge-open6 \
+      --extra-config configs/bridge-cases.toml --jobs "$JOBS"
+    for d in results/bridge-cases/profiles/*/; do keep "$d" table.csv by_class.csv differences.csv; done
+    rm -f results/bridge-cases/profiles/geometry.csv
     # Bridge with the removed ground's returns seen as free space (scripts/ground_study.py oracle's "labels,
     # per point" row against the no-ground setting), on the scenes and three samples
     sample "$TMP/sample-seed7" 60 7
