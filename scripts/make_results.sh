@@ -315,7 +315,7 @@ print(",".join(["bridge", *tomllib.load(open(sys.argv[1], "rb"))["methods"]]))' 
     # sensors-synthetic (whose other methods' figures they sit beside)
     fresh results/bridge-cases/profiles
     python scripts/sensors_study.py profiles --frames 10 --out results/bridge-cases/profiles \
-      --work "$TMP/bridge-cases-sensors" --methods bridge,bridge-open3,bridge-open4,bridge-open6 \
+      --work "$TMP/bridge-cases-sensors" --methods bridge,bridge-no-hole-limit,bridge-open3,bridge-open6 \
       --extra-config configs/bridge-cases.toml --jobs "$JOBS"
     for d in results/bridge-cases/profiles/*/; do keep "$d" table.csv by_class.csv differences.csv; done
     rm -f results/bridge-cases/profiles/geometry.csv

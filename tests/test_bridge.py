@@ -285,17 +285,21 @@ def test_bridges_a_hole_and_reaches_past_a_pole():
 
 def test_free_space_between_two_surfaces_is_not_jumped():
     # two boards 0.3 m apart at 8 m (about 12 columns at 2048): with a wall seen between them
-    # they stay apart; with nothing seen between them (sky) the walk reaches over the gap
+    # they stay apart; with nothing seen between them (sky) the walk without a limit on open
+    # holes reaches over the gap, the default walk stops after 4 of its 12 open holes
     step = 2 * np.pi / WIDTH
     gap_cols = int(round(0.3 / 8.0 / step))
     ranges = wall(8.0, slice(100, 140))
     ranges[20:40, 140 + gap_cols : 180] = 8.0
     behind = ranges.copy()
     behind[20:40, 140 : 140 + gap_cols] = 30.0
-    apart = bridge_labels(behind, ELEVATION, 0.4, 2.0, 16, 1)
-    assert apart[30, 120] != apart[30, 160]
-    joined = bridge_labels(ranges, ELEVATION, 0.4, 2.0, 16, 1)
+    for open_holes in (None, 4):
+        apart = bridge_labels(behind, ELEVATION, 0.4, 2.0, 16, 1, open_holes_px=open_holes)
+        assert apart[30, 120] != apart[30, 160]
+    joined = bridge_labels(ranges, ELEVATION, 0.4, 2.0, 16, 1, open_holes_px=None)
     assert joined[30, 120] == joined[30, 160]
+    default = bridge_labels(ranges, ELEVATION, 0.4, 2.0, 16, 1)
+    assert default[30, 120] != default[30, 160]
 
 
 def test_ground_pixels_show_free_space_but_are_not_nodes():
@@ -305,10 +309,13 @@ def test_ground_pixels_show_free_space_but_are_not_nodes():
     mask = ranges != 9.0
     labels = bridge_labels(ranges, ELEVATION, 1.5, 0.0, 16, 1, mask)
     assert labels[30, 120] != labels[30, 160] and (labels[ranges == 9.0] == 0).all()
-    # the same gap as a hole (nothing there) is bridged
+    # the same gap as a hole (nothing there) is bridged by the walk without a limit on open
+    # holes; the default walk stops after 4 of its 10 columns, empty over the boards' height
     ranges[ranges == 9.0] = 0.0
-    labels = bridge_labels(ranges, ELEVATION, 1.5, 0.0, 16, 1)
+    labels = bridge_labels(ranges, ELEVATION, 1.5, 0.0, 16, 1, open_holes_px=None)
     assert labels[30, 120] == labels[30, 160]
+    labels = bridge_labels(ranges, ELEVATION, 1.5, 0.0, 16, 1)
+    assert labels[30, 120] != labels[30, 160]
 
 
 def test_bridge_component_counts_points_and_maps_to_points():
@@ -412,8 +419,12 @@ def assert_people_whole(labels, instance, apart):
 @pytest.mark.parametrize("distance_m", [20.0, 25.0])
 def test_two_people_half_a_metre_apart_far_away_are_two_clusters(distance_m):
     ranges, elevation, instance = _two_people_image(distance_m, 0.5)
-    for fixed, apart in ((True, True), (False, False)):  # the rule before joined them
-        labels = bridge_labels(ranges, elevation, min_size=10, fixed_side_gaps=fixed)
+    # without a limit on open holes they joined; the rule for gaps beside or the default limit
+    # keeps them apart
+    for fixed, open_holes, apart in ((True, None, True), (False, None, False), (False, 4, True)):
+        labels = bridge_labels(
+            ranges, elevation, min_size=10, fixed_side_gaps=fixed, open_holes_px=open_holes
+        )
         assert_people_whole(labels, instance, apart)
 
 
@@ -422,28 +433,29 @@ def test_a_hole_in_a_surface_is_still_bridged_at_the_far_link_distance():
     # 0.35 m threshold): a band of missing returns with the wall above and below it is a hole
     # in the wall and bridged; the same columns empty over the wall's whole height, with a
     # building seen through them above, are a gap between two things.
+    # (the rule for gaps beside on its own: without the default limit on open holes)
     ranges = wall(20.0, slice(100, 160))
     hole = ranges.copy()
     hole[26:34, 126:134] = 0.0
-    labels = bridge_labels(hole, ELEVATION, min_size=1, fixed_side_gaps=True)
+    labels = bridge_labels(hole, ELEVATION, min_size=1, fixed_side_gaps=True, open_holes_px=None)
     assert np.unique(labels[hole > 0]).size == 1
     gap = ranges.copy()
     gap[:, 126:134] = 0.0
     gap[10:20, 120:140] = 45.0  # a building behind, seen above the wall
-    labels = bridge_labels(gap, ELEVATION, min_size=1, fixed_side_gaps=True)
+    labels = bridge_labels(gap, ELEVATION, min_size=1, fixed_side_gaps=True, open_holes_px=None)
     assert labels[30, 110] > 0 and labels[30, 150] > 0 and labels[30, 110] != labels[30, 150]
     assert np.unique(labels[gap == 20.0]).size == 2
-    old = bridge_labels(gap, ELEVATION, min_size=1, fixed_side_gaps=False)
+    old = bridge_labels(gap, ELEVATION, min_size=1, fixed_side_gaps=False, open_holes_px=None)
     assert np.unique(old[gap == 20.0]).size == 1
     # with nothing seen through the gap's column there is no sign of free space: bridged
     gap[10:20] = 0.0
-    labels = bridge_labels(gap, ELEVATION, min_size=1, fixed_side_gaps=True)
+    labels = bridge_labels(gap, ELEVATION, min_size=1, fixed_side_gaps=True, open_holes_px=None)
     assert np.unique(labels[gap == 20.0]).size == 1
     # a hole whose column shows a farther thing above it (a window) and the wall below it is
     # still a hole in the wall
     window = hole.copy()
     window[20:26, 126:134] = 35.0
-    labels = bridge_labels(window, ELEVATION, min_size=1, fixed_side_gaps=True)
+    labels = bridge_labels(window, ELEVATION, min_size=1, fixed_side_gaps=True, open_holes_px=None)
     assert np.unique(labels[window == 20.0]).size == 1
 
 
