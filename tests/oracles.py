@@ -181,3 +181,60 @@ def file_tree(root: Path) -> dict[str, bytes]:
     if root.is_file():
         return {".": root.read_bytes()}
     return {p.relative_to(root).as_posix(): p.read_bytes() for p in root.rglob("*") if p.is_file()}
+
+
+def seen_through_joins(
+    labels: np.ndarray,
+    raw: np.ndarray,
+    node: np.ndarray,
+    limit: int,
+    depth: float,
+    classes: np.ndarray | None = None,
+) -> list[tuple[int, int]]:
+    """The joins of Bridge's seen-through rule, pixel by pixel as its module docstring says.
+
+    Parameters
+    ----------
+    labels : (H, W) clusters as the walks left them (every node labelled, > 0).
+    raw : (H, W) every range (0 = empty), nodes or not.
+    node : (H, W) bool, the nodes.
+    limit : the steps of a look (sideways less than a full turn).
+    depth : the deepest B may lie behind A.
+    classes : (H, W) class of every pixel, or None (any class).
+
+    Returns
+    -------
+    (B, A) of every cluster B whose outline looks, in each of the four directions, onto A from
+    more than half of its outline pixels.
+    """
+    h, w = labels.shape
+    looks: dict[int, list[list[int]]] = {}
+    for r in range(h):
+        for c in range(w):
+            if not node[r, c]:
+                continue
+            b = int(labels[r, c])
+            per_dir = looks.setdefault(b, [[], [], [], []])
+            for di, (dr, dc) in enumerate(((0, -1), (0, 1), (-1, 0), (1, 0))):
+                steps = min(limit, w - 1) if dr == 0 else limit
+                pixels = []
+                for k in range(1, steps + 1):
+                    if not 0 <= r + k * dr < h:
+                        break
+                    pixels.append((r + k * dr, (c + k * dc) % w))
+                if any(node[p] and labels[p] == b for p in pixels):
+                    continue  # no outline pixel: B goes on that way
+                first = next((p for p in pixels if 0 < raw[p] <= raw[r, c]), None)
+                a = 0
+                if first is not None and node[first] and raw[r, c] - raw[first] <= depth:
+                    if classes is None or classes[first] == classes[r, c]:
+                        a = int(labels[first])
+                per_dir[di].append(a)
+    joins = []
+    for b, per_dir in looks.items():
+        if any(not d for d in per_dir):
+            continue
+        a, count = max(((x, per_dir[0].count(x)) for x in set(per_dir[0])), key=lambda t: t[1])
+        if a != 0 and all(2 * d.count(a) > len(d) for d in per_dir):
+            joins.append((b, a))
+    return joins

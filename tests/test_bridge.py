@@ -7,7 +7,16 @@ import pytest
 import reference_kernels  # tests/reference_kernels.py: the kernels before issue 11's rework
 from hypothesis import assume, given, settings
 from hypothesis import strategies as st
-from oracles import image_components, surface_scenes, xyz_of
+from oracles import (
+    canonical,
+    graph_components,
+    image_components,
+    range_images,
+    same_partition,
+    seen_through_joins,
+    surface_scenes,
+    xyz_of,
+)
 
 from flic_cli.methods import Bridge, bridge_labels, flic_labels
 from flic_cli.range_image import RangeImage, from_sensor_image
@@ -639,3 +648,160 @@ def test_a_low_box_before_a_van_stays_apart_where_the_footprint_exceeds_the_cap(
     a, b = labels[instance == 1], labels[instance == 2]
     assert a.size > 30 and b.size > 100
     assert np.intersect1d(a, b).size == 0 and (a > 0).all() and (b > 0).all()
+
+
+@settings(max_examples=150, deadline=None)
+@given(
+    image=range_images(),
+    data=st.data(),
+    reach=st.sampled_from([1, 3, 12]),
+    depth=st.sampled_from([0.5, 4.0, 20.0]),
+    use_classes=st.booleans(),
+)
+def test_seen_through_joins_equal_their_definition(image, data, reach, depth, use_classes):
+    """Bridge with the seen-through rule gives the components of Bridge without it plus the
+    joins that the rule's definition, applied pixel by pixel, finds (tests/oracles.py)."""
+    ranges, elevation = image
+    rng = np.random.default_rng(data.draw(st.integers(0, 2**32 - 1)))
+    mask = rng.random(ranges.shape) < data.draw(st.sampled_from([1.0, 0.8]))
+    classes = rng.integers(0, 2, ranges.shape) if use_classes else None
+    args = (ranges, elevation, 0.35, 2.0, reach, 1, mask)
+    base = bridge_labels(*args, seen_through_m=0.0)
+    got = bridge_labels(*args, seen_through_m=depth, classes=classes)
+    node = mask & (ranges > 0)
+    joins = seen_through_joins(base, ranges, node, reach, depth, classes)
+    n = int(base.max()) + 1
+    comp = graph_components(n, joins)
+    expected = np.where(base > 0, comp[base] + 1, 0)
+    np.testing.assert_array_equal(got, canonical(expected))
+
+
+def window_scene(far_m: float) -> tuple[np.ndarray, np.ndarray]:
+    """A bus's near side at 15 m (16 x 60 pixels of an HDL-64E-like 2048-column image) with two
+    windows (rows 4-8, columns 10-25 and 32-50) through which its far side is seen ``far_m``
+    behind, a pillar of near side between them."""
+    ranges = np.zeros((20, 2048), np.float32)
+    ranges[2:18, 5:65] = 15.0
+    ranges[4:9, 10:26] = 15.0 + far_m
+    ranges[4:9, 32:51] = 15.0 + far_m
+    return ranges, np.radians(np.linspace(2.0, -6.0, 20))
+
+
+def test_a_far_side_seen_through_windows_joins_the_near_side_with_semantics():
+    ranges, elevation = window_scene(2.5)
+    apart = bridge_labels(ranges, elevation, min_size=1)
+    # the near side, and the far side (one cluster: Bridge walks over the nearer pillar)
+    assert np.unique(apart[ranges > 0]).size == 2
+    bus = np.full(ranges.shape, 16)
+    joined = bridge_labels(ranges, elevation, min_size=1, seen_through_m=4.0, classes=bus)
+    assert np.unique(joined[ranges > 0]).size == 1
+    # too deep behind for the rule (a wall seen through both windows), or of another class
+    deep = bridge_labels(*window_scene(6.0), min_size=1, seen_through_m=4.0, classes=bus)
+    assert np.unique(deep[ranges > 0]).size == 2
+    other = bus.copy()
+    other[4:9, 10:51] = 11  # a motorcycle behind a car's windows
+    kept = bridge_labels(ranges, elevation, min_size=1, seen_through_m=4.0, classes=other)
+    assert np.unique(kept[ranges > 0]).size == 2
+
+
+def test_a_cluster_that_stands_out_of_the_frame_is_not_seen_through():
+    """A person 2.5 m behind the bus, seen through its window (nothing else behind it) and with
+    the head above its roof: the person's top looks onto nothing, so it stays apart. Without
+    the head it would be framed by the bus and join it (the case semantics tell apart)."""
+    ranges, elevation = window_scene(2.5)
+    ranges[4:9, 10:26] = ranges[4:9, 32:51] = 0.0  # the rays through the windows see nothing
+    ranges[4:9, 14:20] = 17.5  # the torso through the window
+    hidden = bridge_labels(ranges, elevation, min_size=1, seen_through_m=4.0)
+    assert hidden[5, 15] == hidden[10, 15]
+    ranges[0:2, 14:20] = 17.5  # the head above the roof (rows 2-3)
+    labels = bridge_labels(ranges, elevation, min_size=1, seen_through_m=4.0)
+    assert labels[0, 15] == labels[5, 15] != labels[10, 15]
+
+
+def test_bridge_uses_semantics_only_in_runs_with_them():
+    """Class-agnostic (evaluate's IoU, benchmark, sweeps): the rule is off, Bridge's labels those
+    of Bridge without it; with semantics (segment --semantics, the oracle PQ) it joins."""
+    from flic_cli.runs.pipeline import segment_with, uses_semantics
+
+    ranges, elevation = window_scene(2.5)
+    image = from_sensor_image(ranges, elevation)
+    points = image.pixel_points(image.point_pixel)
+    method = Bridge(min_size=1)
+    bus = np.full(points.shape[0], 13)  # raw class bus
+    assert uses_semantics(method)
+    agnostic = segment_with(method, image, points, None, bus)
+    assert np.unique(agnostic).size == 2
+    assert np.unique(method.segment(image, points, None, semantics=bus)).size == 1
+    always = Bridge(min_size=1, seen_through_agnostic=True).segment(image, points, None)
+    assert np.unique(always).size == 1
+
+
+@st.composite
+def framed_labels(draw):
+    """Cluster maps that frame one another: a cluster A with a farther one B inside its frame
+    (0.5-5 m behind, its class that of A or not), and rectangles of other clusters (a range in
+    5-15 m on a 0.5 m grid, a class 0 or 1) drawn before and after, over or across them; holes
+    (no range) and returns left out (a range, no node) sprinkled in."""
+    h = draw(st.integers(3, 10))
+    w = draw(st.integers(3, 20))
+    rng = np.random.default_rng(draw(st.integers(0, 2**32 - 1)))
+    labels = np.zeros((h, w), np.int64)
+    raw = np.zeros((h, w))
+    cls = np.zeros((h, w), np.int64)
+
+    def rectangle(k, r0, r1, c0, c1, d):
+        labels[r0:r1, c0:c1] = k
+        raw[r0:r1, c0:c1] = d
+        cls[r0:r1, c0:c1] = rng.integers(0, 2)
+
+    def anywhere(k):
+        r0, c0 = rng.integers(0, h), rng.integers(0, w)
+        rectangle(k, r0, rng.integers(r0, h) + 1, c0, rng.integers(c0, w) + 1,
+                  np.round(rng.uniform(5.0, 15.0) * 2) / 2)  # fmt: skip
+
+    k = 0
+    for k in range(1, draw(st.integers(0, 3)) + 1):
+        anywhere(k)
+    r0, c0 = rng.integers(0, h - 2), rng.integers(0, w - 2)
+    r1, c1 = rng.integers(r0 + 3, h + 1), rng.integers(c0 + 3, w + 1)
+    d = np.round(rng.uniform(5.0, 12.0) * 2) / 2
+    rectangle(k + 1, r0, r1, c0, c1, d)  # A
+    rb = rng.integers(r0 + 1, r1 - 1)
+    cb = rng.integers(c0 + 1, c1 - 1)
+    rectangle(k + 2, rb, rng.integers(rb, r1 - 1) + 1, cb, rng.integers(cb, c1 - 1) + 1,
+              d + rng.choice([0.5, 1.0, 3.0, 5.0]))  # fmt: skip
+    for extra in range(k + 3, k + 3 + draw(st.integers(0, 3))):
+        anywhere(extra)
+    raw[rng.random((h, w)) < draw(st.sampled_from([0.0, 0.1, 0.3]))] = 0.0
+    node = raw > 0
+    left_out = node & (rng.random((h, w)) < draw(st.sampled_from([0.0, 0.1])))
+    raw[left_out & (labels == 0)] = 0.0
+    node &= ~left_out & (labels > 0)
+    return labels * node, raw, node, cls
+
+
+@settings(max_examples=300, deadline=None)
+@given(
+    scene=framed_labels(),
+    limit=st.sampled_from([1, 2, 5, 12]),
+    depth=st.sampled_from([1.0, 4.0]),
+    use_classes=st.booleans(),
+)
+def test_the_seen_through_kernel_joins_what_its_definition_joins(scene, limit, depth, use_classes):
+    """The kernel of the seen-through rule on arbitrary cluster maps that frame one another
+    against the rule applied pixel by pixel (tests/oracles.py)."""
+    from flic_cli.methods.bridge import _seen_through
+
+    labels, raw, node, cls = scene
+    h, w = labels.shape
+    n = int(labels.max())
+    parent = np.arange(n + 1, dtype=np.uint32)
+    _seen_through(
+        labels.reshape(-1).astype(np.uint32), parent, np.where(node, raw, 0.0).reshape(-1),
+        raw.reshape(-1), cls.reshape(-1), use_classes, h, w, n, limit, depth,
+    )  # fmt: skip
+    joins = seen_through_joins(labels, raw, node, limit, depth, cls if use_classes else None)
+    expected = graph_components(n + 1, joins)
+    got = parent.astype(np.int64)
+    present = np.unique(labels[node])
+    assert same_partition(got[present], expected[present])

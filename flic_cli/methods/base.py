@@ -26,7 +26,11 @@ class Method(Protocol):
     What the runs need to know is declared on the class: ``main_param`` names the parameter that
     ``flic sweep-threshold`` varies, ``sweep_range = (from, to, step)`` its default range and
     ``sweep_label`` its axis label (with unit); ``slow = True`` makes ``flic benchmark`` time the
-    method on every n-th frame only (``--slow-every``, as DBSCAN). A method that needs an
+    method on every n-th frame only (``--slow-every``, as DBSCAN). A method that clusters per
+    semantic class declares ``needs_semantics`` (ALPINE; it then takes ``semantics=``, the raw
+    class of every point, in ``segment``); one that uses the classes in a run with semantics
+    (``--semantics``) and clusters without them otherwise declares ``uses_semantics`` (Bridge).
+    A method that needs an
     optional package names it in its :data:`flic_cli.registry.METHODS` entry (``requires``,
     ``install``) or defines ``check_installed(self)`` when it depends on a parameter.
     """

@@ -170,6 +170,13 @@ def needs_semantics(method: Any) -> bool:
     return bool(getattr(method, "needs_semantics", False))
 
 
+def uses_semantics(method: Any) -> bool:
+    """Whether ``method`` uses the semantic classes when a run has them (``--semantics``) and
+    clusters without them otherwise (declares ``uses_semantics``, e.g.
+    :class:`flic_cli.methods.bridge.Bridge`), or needs them (:func:`needs_semantics`)."""
+    return needs_semantics(method) or bool(getattr(method, "uses_semantics", False))
+
+
 def segment_with(
     method: Any,
     image: RangeImage,
@@ -178,10 +185,21 @@ def segment_with(
     semantics: np.ndarray | None = None,
 ) -> np.ndarray:
     """``method.segment(image, points, ground)``, with ``semantics`` ((N,) raw class of every
-    point of ``points``) handed over only to a method that needs them (:func:`needs_semantics`)."""
+    point of ``points``) handed over only to a method that needs them (:func:`needs_semantics`):
+    the class-agnostic runs, where the ground truth's classes are there for such methods."""
     if needs_semantics(method):
         return method.segment(image, points, ground, semantics=semantics)
     return method.segment(image, points, ground)
+
+
+def segment_semantic(method: Any, prep: Prepared, semantics: np.ndarray) -> np.ndarray:
+    """A run with semantics (``--semantics``): ``method``'s labels of the thing-class points of
+    :func:`prepare_semantic`, the classes handed over to every method that uses them
+    (:func:`uses_semantics`); ``semantics``: (N_scan,) as :func:`scan_semantics` gives them."""
+    if uses_semantics(method):
+        classes = prepared_semantics(prep, semantics)
+        return method.segment(prep.image, prep.points, None, semantics=classes)
+    return method.segment(prep.image, prep.points, None)
 
 
 def prepared_semantics(prep: Prepared, semantics: np.ndarray | None = None) -> np.ndarray | None:

@@ -32,7 +32,7 @@ from flic_cli.runs.pipeline import (
     prepare_semantic,
     prepared_semantics,
     scan_semantics,
-    segment_with,
+    segment_semantic,
 )
 
 #: Columns of the per-object records (``per_object.csv``).
@@ -200,9 +200,7 @@ def oracle_panoptic(
     prep = prepare_semantic(frame, semantics, projection)
     rows: dict[str, list] = {c: [] for c in PANOPTIC_COLUMNS}
     for seg in segmenters:
-        labels = segment_with(
-            seg.method, prep.image, prep.points, None, prepared_semantics(prep, semantics)
-        )
+        labels = segment_semantic(seg.method, prep, semantics)
         counts = panoptic_counts(gt, combine(semantics, prep.scan_labels(labels)))
         n = len(counts)
         rows["method"] += [seg.name] * n

@@ -41,9 +41,8 @@ from flic_cli.runs.pipeline import (
     build_segmenter,
     prepare,
     prepare_semantic,
-    prepared_semantics,
     scan_semantics,
-    segment_with,
+    segment_semantic,
 )
 from flic_cli.runs.spec import SegmentRun
 from flic_cli.sensor_params import for_dataset
@@ -114,10 +113,7 @@ class SegmentJob:
             return Segmented(prep, labels, ground, extra=extra, latency_ms=ms)
         semantics = scan_semantics(frame, self.semantics)
         prep = prepare_semantic(frame, semantics, self.projection)
-        labels = segment_with(
-            self.segmenter.method, prep.image, prep.points, None,
-            prepared_semantics(prep, semantics),
-        )  # fmt: skip
+        labels = segment_semantic(self.segmenter.method, prep, semantics)
         ms = (time.perf_counter() - start) * 1e3
         return Segmented(prep, labels, None, semantics, extra=extra, latency_ms=ms)
 
