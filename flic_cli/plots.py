@@ -73,10 +73,7 @@ def render_segmentation(
 
     plt = _pyplot()
     h, w = image.shape
-    pix = np.zeros(h * w, dtype=np.int64)
-    has = image.point_pixel >= 0
-    pix[image.point_pixel[has]] = point_labels[has]
-    pix = pix.reshape(h, w)
+    pix = image.pixel_values(np.asarray(point_labels, dtype=np.int64))
     k = int(pix.max())
     rgb = cluster_colours(k)[pix]
     valid = image.valid

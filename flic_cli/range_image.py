@@ -170,6 +170,25 @@ class RangeImage:
             np.cos(el), np.sin(el), cos_az, sin_az, per_row,
         )  # fmt: skip
 
+    def pixel_values(self, point_values: np.ndarray, fill: int = 0) -> np.ndarray:
+        """Per-pixel values from per-point values, the inverse of :meth:`point_labels`: each
+        pixel takes the value of the last point that falls into it.
+
+        Parameters
+        ----------
+        point_values : (N,) array, one value per point.
+        fill : the value of pixels that no point falls into.
+
+        Returns
+        -------
+        (H, W) array of ``point_values``' dtype.
+        """
+        values = np.asarray(point_values)
+        out = np.full(self.ranges.size, fill, dtype=values.dtype)
+        has = self.point_pixel >= 0
+        out[self.point_pixel[has]] = values[has]
+        return out.reshape(self.ranges.shape)
+
     def point_labels(self, pixel_labels: np.ndarray) -> np.ndarray:
         """Per-point labels from per-pixel labels: every point takes its pixel's label.
 

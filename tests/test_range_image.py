@@ -386,3 +386,23 @@ def test_row_azimuth_offsets_move_every_point_of_their_row(seed, height, width):
     np.testing.assert_array_equal(plain.azimuth_offset, np.zeros(height))
     with pytest.raises(ValueError, match="azimuth_offset"):
         from_sensor_image(ranges, elevation, np.zeros(height + 1))
+
+
+@settings(max_examples=40, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1))
+def test_pixel_values_invert_point_labels(seed):
+    """``pixel_values`` puts each point's value on its pixel (the last point's where several
+    share one), ``fill`` elsewhere; ``point_labels`` of its result gives every point its pixel's
+    value back."""
+    rng = np.random.default_rng(seed)
+    pts = rng.uniform(-30.0, 30.0, (200, 3)).astype(np.float32)
+    image = project_points(pts, width=64, mode="spherical", rows=16)
+    values = rng.integers(1, 9, 200)
+    pix = image.pixel_values(values, fill=-1)
+    expected = np.full(image.ranges.size, -1)
+    for i, p in enumerate(image.point_pixel):  # the last point of a pixel wins
+        if p >= 0:
+            expected[p] = values[i]
+    np.testing.assert_array_equal(pix.reshape(-1), expected)
+    has = image.point_pixel >= 0
+    np.testing.assert_array_equal(image.point_labels(pix)[has], expected[image.point_pixel[has]])

@@ -1234,11 +1234,7 @@ def pixel_classes(image: RangeImage, semantics: np.ndarray) -> np.ndarray:
     """(H, W) int64 learning class (:func:`flic_cli.classes.learning_class`) of every pixel of
     ``image``: that of its last point (``semantics``: raw class of every point), -1 where no
     point falls."""
-    out = np.full(image.ranges.size, -1, dtype=np.int64)
-    pix = image.point_pixel
-    ok = pix >= 0
-    out[pix[ok]] = learning_class(np.asarray(semantics))[ok]
-    return out.reshape(image.ranges.shape)
+    return image.pixel_values(learning_class(np.asarray(semantics)).astype(np.int64), fill=-1)
 
 
 def bridge_labels(
