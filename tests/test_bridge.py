@@ -36,9 +36,9 @@ def column_neighbours(node, ranges, rq, cq):
 
 def level_spacing(elevation, r, rq):
     """Footprint spacing per metre of height of a level surface between the beams of rows r and
-    rq, or None where one level surface cannot be hit by both (elevations of different signs)."""
+    rq, or None where they do not both look down (no level link above the sensor)."""
     a, b = float(elevation[r]), float(elevation[rq])
-    if a * b <= 0.0:
+    if a >= 0.0 or b >= 0.0:
         return None
     return abs(1.0 / np.tan(b) - 1.0 / np.tan(a))
 
@@ -73,7 +73,8 @@ def bridge_graph(
     open_holes=None,
 ):
     """Edges of the Bridge graph, walked exactly as the module docstring says; ``level``:
-    (tolerance, margin, cap, supported only) of the level rule of the up walk, or None (off);
+    (tolerance, margin, cap, support: "none", "either" or "beyond") of the level rule of the up
+    walk, or None (off);
     ``azimuth_offset``: (H,) of every row, radians (the 3D points from the true directions);
     ``open_holes``: the most open holes a sideways walk crosses, or None (no limit).
 
@@ -124,8 +125,9 @@ def bridge_graph(
                     margins.append(dist - tp)
                     linked = dist < tp
                     if level and (dr, dc) == UP and not linked:
-                        # level with p, and the node right below p level with p or the node
-                        # right above q level with q
+                        # level with p, and by the support: nothing more ("none"), the node
+                        # right above q level with q ("beyond"), or that or the node right below
+                        # p level with p ("either")
                         def lv(a, b):
                             return (
                                 node[a]
@@ -135,8 +137,8 @@ def bridge_graph(
 
                         below, above = (r + 1, c), (rq - 1, cq)
                         linked = lv((r, c), (rq, cq)) and (
-                            not level[3]
-                            or (r + 1 < h and lv(below, (r, c)))
+                            level[3] == "none"
+                            or (level[3] == "either" and r + 1 < h and lv(below, (r, c)))
                             or (rq >= 1 and lv((rq, cq), above))
                         )
                     if linked:
@@ -148,6 +150,18 @@ def bridge_graph(
     return edges, margins
 
 
+SUPPORTS = st.sampled_from(["none", "either", "beyond"])
+
+#: Bridge's level rule as it is by default, as :func:`bridge_graph` takes it.
+DEFAULT_LEVEL = (
+    Bridge.level_tolerance,
+    Bridge.level_margin,
+    Bridge.level_cap_m,
+    Bridge.level_support,
+)
+#: The level rule off, as :func:`bridge_labels` takes it.
+NO_LEVEL = (0.0, 1.5, 2.0, "none")
+
 #: Bridge's parameters as the graph tests draw them (the level rule: None = off).
 BRIDGE_PARAMS = dict(
     threshold=st.floats(0.2, 3.0),
@@ -158,7 +172,7 @@ BRIDGE_PARAMS = dict(
     open_holes=st.one_of(st.none(), st.integers(0, 4)),
     level=st.one_of(
         st.none(),
-        st.tuples(st.floats(0.05, 1.0), st.floats(0.5, 3.0), st.floats(0.3, 6.0), st.booleans()),
+        st.tuples(st.floats(0.05, 1.0), st.floats(0.5, 3.0), st.floats(0.3, 6.0), SUPPORTS),
     ),
 )
 
@@ -175,7 +189,7 @@ def test_bridge_equals_components_of_its_graph(
     assume(all(abs(m) > 1e-4 for m in margins))
     node = mask & (ranges > 0)
     expected = image_components(ranges.shape, node, edges, min_size, weights)
-    lv = level or (0.0, 1.5, 2.0, False)
+    lv = level or NO_LEVEL
     got = bridge_labels(
         ranges, elevation, threshold, gamma, reach, min_size, mask, weights, fixed, *lv,
         open_holes_px=open_holes,
@@ -208,7 +222,7 @@ def test_bridge_with_azimuth_offsets_equals_components_of_its_true_3d_graph(
     assume(all(abs(m) > 1e-4 for m in margins))
     node = mask & (ranges > 0)
     expected = image_components(ranges.shape, node, edges, min_size, weights)
-    lv = level or (0.0, 1.5, 2.0, False)
+    lv = level or NO_LEVEL
     got = bridge_labels(
         ranges, elevation, threshold, gamma, reach, min_size, mask, weights, fixed, *lv, offset,
         open_holes,
@@ -224,8 +238,9 @@ def test_bridge_reads_the_azimuth_offsets_from_the_image(scene, threshold, reach
     ranges, elevation, _, _, offset = scene
     everything = np.ones(ranges.shape, bool)
     edges, margins = bridge_graph(
-        ranges, elevation, everything, threshold, 2.0, reach, False, None, offset
-    )
+        ranges, elevation, everything, threshold, 2.0, reach, False, DEFAULT_LEVEL, offset,
+        Bridge.open_holes_px,
+    )  # fmt: skip
     assume(all(abs(m) > 1e-4 for m in margins))
     expected = image_components(ranges.shape, ranges > 0, edges, 1, np.ones(ranges.shape))
     img = from_sensor_image(ranges, elevation, offset)
@@ -250,11 +265,13 @@ def test_bridge_gives_the_labels_of_the_previous_kernel(
     mask = mask if masked else None
     weights = weights if weighted else None
     np.testing.assert_array_equal(
-        bridge_labels(ranges, elevation, threshold, gamma, reach, min_size, mask, weights, False),
+        bridge_labels(
+            ranges, elevation, threshold, gamma, reach, min_size, mask, weights, False, *NO_LEVEL
+        ),
         reference_kernels.bridge_labels(
             ranges, elevation, threshold, gamma, reach, min_size, mask, weights
         ),
-    )  # the rule for gaps beside (fixed_side_gaps) came after that kernel
+    )  # the rules for gaps beside (fixed_side_gaps) and level surfaces came after that kernel
 
 
 @settings(max_examples=200, deadline=None)
@@ -578,7 +595,7 @@ def box_scenes(draw):
     threshold=st.floats(0.2, 1.0),
     gamma=st.sampled_from([0.0, 2.0]),
     reach=st.integers(1, 12),
-    level=st.tuples(st.floats(0.05, 1.0), st.floats(0.5, 3.0), st.floats(0.3, 6.0), st.booleans()),
+    level=st.tuples(st.floats(0.05, 1.0), st.floats(0.5, 3.0), st.floats(0.3, 6.0), SUPPORTS),
 )
 def test_bridge_with_level_surfaces_equals_its_graph_on_boxes(
     scene, threshold, gamma, reach, level
@@ -620,21 +637,96 @@ def _vehicle_image(kind: str, distance_m: float):
 
 
 @pytest.mark.parametrize(("kind", "distance_m"), [("car", 8.0), ("van", 8.0)])
-def test_a_box_shaped_vehicle_is_one_cluster_with_the_level_rule(kind, distance_m):
+def test_a_box_shaped_vehicle_is_one_cluster_with_the_bare_level_rule(kind, distance_m):
     # Without the rule the vehicle splits where the scan passes from its face onto its top or
     # hood (rows of a level surface lie d^2 de / h apart there, more than the 0.35 m link);
-    # with the level-surface link of the up walk the face and the top are one cluster. (From
-    # 12 m on both stay split with the defaults: the footprint there exceeds the cap over the
-    # margin, or the hit lies beyond a quarter footprint from the level prediction;
+    # with the level-surface link of the up walk and no support asked, the face and the top
+    # are one cluster. (From 12 m on both stay split: the footprint there exceeds the cap over
+    # the margin, or the hit lies beyond a quarter footprint from the level prediction;
     # results/bridge-cases/, "A rule for cause 2".)
     ranges, elevation, instance = _vehicle_image(kind, distance_m)
     obj = instance == 1
     assert obj.sum() > 200
-    without = bridge_labels(ranges, elevation, min_size=1)
+    without = bridge_labels(ranges, elevation, min_size=1, level_tolerance=0.0)
     assert np.unique(without[obj]).size > 1
-    labels = bridge_labels(ranges, elevation, min_size=1, level_tolerance=0.25)
+    labels = bridge_labels(ranges, elevation, min_size=1, level_support="none")
     assert np.unique(labels[obj]).size == 1 and labels[obj][0] > 0
     assert ((labels == labels[obj][0]) == obj).all()  # nothing else joins it
+
+
+@pytest.mark.parametrize("distance_m", [7.0, 8.0])
+def test_a_car_seen_from_behind_is_one_cluster_with_the_default_level_rule(distance_m):
+    # The sample's car model (body, roof, window pillars) from behind: without the level rule
+    # its rear face, the rows of its top and its pillars are five or more clusters, the largest
+    # under 70 % of it; with the default rule (a level node beyond q) one cluster holds more than
+    # 90 % of it (its top's last row, with nothing level beyond it, stays apart) and nothing else
+    ranges, elevation, instance = _vehicle_image("car", distance_m)
+    obj = instance == 1
+    without = bridge_labels(ranges, elevation, min_size=1, level_tolerance=0.0)
+    _, sizes = np.unique(without[obj], return_counts=True)
+    assert sizes.size >= 5 and sizes.max() < 0.7 * obj.sum()
+    labels = bridge_labels(ranges, elevation, min_size=1)
+    ids, sizes = np.unique(labels[obj], return_counts=True)
+    main = ids[np.argmax(sizes)]
+    assert main > 0 and sizes.max() > 0.9 * obj.sum()
+    assert not ((labels == main) & ~obj).any()
+
+
+def _behind_a_car_image(distance_m: float, behind_m: float, size: tuple[float, float, float]):
+    """The car of :func:`_vehicle_image` (rear face at ``distance_m``, 4.4 m long) and a box
+    standing ``behind_m`` beyond its front (instance 2, a person or a motorcycle by ``size``),
+    seen through the car's windows above its body, the ground's returns removed."""
+    from flic_cli.classes import GROUND_CLASSES
+    from flic_cli.sample import HDL64_PITCH_DEG, Ground, Scene, car, cast, person
+
+    boxes = [*car(distance_m + 2.2, 0.0, 1), person(distance_m + 4.4 + behind_m, 0.0, 2, size=size)]
+    scene = Scene(0, 0, np.eye(3, 4), Ground.flat(), boxes, [])
+    elevation = -np.radians(HDL64_PITCH_DEG)
+    img0 = RangeImage(np.zeros((64, WIDTH), np.float32), elevation, np.zeros(0, np.int64), "x")
+    ranges, semantic, instance = cast(
+        scene, HDL64_PITCH_DEG, img0.azimuth, np.random.default_rng(0)
+    )
+    ranges[np.isin(semantic, list(GROUND_CLASSES))] = 0.0
+    return ranges.astype(np.float32), elevation, instance
+
+
+@pytest.mark.parametrize(
+    ("distance_m", "behind_m", "size"),
+    [(6.0, 0.6, (0.5, 0.4, 1.75)), (8.0, 1.0, (0.5, 0.4, 1.75)), (7.0, 1.5, (1.8, 0.6, 1.2))],
+)
+def test_what_stands_behind_a_car_stays_apart_with_the_level_node_beyond_q(
+    distance_m, behind_m, size
+):
+    # A person or a motorcycle behind a car, seen through its windows: its first return above
+    # the car's body lies at the body's height (the car hides it below that line), level with
+    # the body's top. With the support "either" (the node below p, on the car's top, is level)
+    # or none it joins the car; the default asks the node above q to be level with q, and on an
+    # upright object it is not (module docstring, "Level surfaces").
+    ranges, elevation, instance = _behind_a_car_image(distance_m, behind_m, size)
+    assert (instance == 2).sum() > 50
+
+    def joined(**level):
+        labels = bridge_labels(ranges, elevation, min_size=1, **level)
+        return np.intersect1d(labels[instance == 1], labels[instance == 2]).size > 0
+
+    assert joined(level_support="either") and joined(level_support="none")
+    assert not joined()
+
+
+def test_no_level_link_above_the_sensor():
+    # Two level surfaces 0.25 m above and 0.25 m below the sensor, each hit by three rows
+    # 0.26-0.34 m apart (more than the 0.2 m link), in one column: below, the level rule links
+    # the rows (a car's top; by default the last one, with no level node beyond it, stays
+    # apart); above, the surface is an underside seen from below (a canopy, which a person's
+    # head just beyond its edge would meet at its height) and no level link is made.
+    elevation = np.radians(np.array([8.0, 7.0, 6.0, -6.0, -7.0, -8.0]))
+    ranges = (0.25 / np.abs(np.sin(elevation)))[:, None].astype(np.float32)
+    for support, below in (("none", slice(3, 6)), ("beyond", slice(4, 6))):
+        labels = bridge_labels(ranges, elevation, 0.2, 0.0, 3, 1, level_support=support)
+        assert np.unique(labels[below]).size == 1
+        assert np.unique(labels[:3]).size == 3
+    off = bridge_labels(ranges, elevation, 0.2, 0.0, 3, 1, level_tolerance=0.0)
+    assert np.unique(off).size == 6
 
 
 @pytest.mark.parametrize("distance_m", [16.0, 20.0])

@@ -362,9 +362,9 @@ def _same_labels_as_before(data: Path, methods, settings_, frames=None) -> int:
     """Compare every method's segment() with the previous kernels on the frames of ``data``,
     on the pipeline's image and mask (ground and held cells left out) without the attachment of
     held cells, which the previous kernels did not have (tests/test_ground_column.py tests it);
-    returns the number of comparisons. Bridge is compared without its limit on open holes,
-    which the previous kernel did not have (tests/test_bridge.py checks the limit against the
-    brute-force graph)."""
+    returns the number of comparisons. Bridge is compared without its limit on open holes and
+    without its level rule, which the previous kernel did not have (tests/test_bridge.py checks
+    both against the brute-force graph)."""
     import dataclasses
 
     from flic_cli.config import load_config
@@ -388,7 +388,7 @@ def _same_labels_as_before(data: Path, methods, settings_, frames=None) -> int:
                     ground = Ground.from_mask(image, mask)
                 method = seg.method
                 if isinstance(method, Bridge):
-                    method = dataclasses.replace(method, open_holes_px=None)
+                    method = dataclasses.replace(method, open_holes_px=None, level_tolerance=0.0)
                 got = method.segment(image, prep.points, ground)
                 want = reference_kernels.segment(method, image, mask)
                 np.testing.assert_array_equal(got, want, err_msg=f"{seg.name} {setting} {ref}")
