@@ -281,11 +281,13 @@ def walk_tables_offset(
     return cos_t, sin_t
 
 
-def _walk_row_kernel(options: bool, holes: bool) -> Callable[..., None]:
-    """:func:`_walk_row` compiled with the tests of ``fixed_side_gaps`` and of the level rule
-    (``options``) or without them, with the open-holes count (``holes``) or without it.
+def _walk_row_kernel(gaps: bool, level_rule: bool, holes: bool) -> Callable[..., None]:
+    """:func:`_walk_row` compiled with the tests of ``fixed_side_gaps`` (``gaps``) or without
+    them, with those of the level rule (``level_rule``) or without them, with the open-holes count
+    (``holes``) or without it.
 
-    ``options`` and ``holes`` are constants of the compiled code, so a walk carries none of the
+    ``gaps``, ``level_rule`` and ``holes`` are constants of the compiled code, so a walk carries
+    none of the
     loads, stores and selects of the rules it does not use: with the options compiled in but off,
     Bridge took 10-13 % longer per SemanticKITTI frame than before the options came (measured
     interleaved; see results/benchmark/revisions/README.md).
@@ -333,9 +335,9 @@ def _walk_row_kernel(options: bool, holes: bool) -> Callable[..., None]:
         above and below every pixel (:func:`_column_neighbours`). ``level``: the level-surface
         rule of the up walk (:func:`level_tables`, module docstring). ``max_open``: the most
         open holes a sideways walk crosses (-1 = no limit; module docstring, "Open holes"),
-        ``n_open``: scratch, the open holes each walk has crossed. Without ``options``
-        (:func:`_walk_row_kernel`) ``fixed_side_gaps`` and ``level`` are not read, without
-        ``holes`` ``max_open``.
+        ``n_open``: scratch, the open holes each walk has crossed. Without ``gaps``
+        (:func:`_walk_row_kernel`) ``fixed_side_gaps`` is not read, without ``level_rule``
+        ``level``, without ``holes`` ``max_open``.
         """
         one = np.uint64(1)
         level_on, sin_e, tan_e, spacing, level_tol, level_margin, level_cap, support = level
@@ -347,8 +349,8 @@ def _walk_row_kernel(options: bool, holes: bool) -> Callable[..., None]:
             kmax = k_row if di == 0 else (k_up if di == 1 else k_diag)
             if kmax < 2:
                 continue
-            side = options & fixed_side_gaps & (di != 1)
-            lv_walk = options & level_on & (di == 1)
+            side = gaps & fixed_side_gaps & (di != 1)
+            lv_walk = level_rule & level_on & (di == 1)
             limit = holes & (max_open >= 0) & (di != 1)
             row_1 = (r + dr) * w
             m = 0
@@ -358,7 +360,7 @@ def _walk_row_kernel(options: bool, holes: bool) -> Callable[..., None]:
                     c = 64 * k + np.int64(trailing_zeros(bits))
                     bits &= bits - one
                     walks[m] = c
-                    if options or holes:
+                    if gaps or holes:
                         c1 = c + dc
                         c1 += w if c1 < 0 else 0
                         c1 -= w if c1 >= w else 0
@@ -368,7 +370,7 @@ def _walk_row_kernel(options: bool, holes: bool) -> Callable[..., None]:
                         d1 = np.float64(nodes[row + c])
                         t1 = max(threshold, d1 * sin_gamma)
                         e1 = nodes[q1] <= 0.0
-                        if options:
+                        if gaps:
                             holed[m] = side and e1 and _open_gap(above, below, q1, d1, t1)
                         if limit:
                             # the first step crossed an open hole (no surface at p's range in
@@ -441,11 +443,12 @@ def _walk_row_kernel(options: bool, holes: bool) -> Callable[..., None]:
     return walk_row
 
 
-#: The walks past the first steps: the default graph, with the open-holes count only, and with
-#: every option's tests.
-_walk_row_default = _walk_row_kernel(False, False)
-_walk_row_holes = _walk_row_kernel(False, True)
-_walk_row = _walk_row_kernel(True, True)
+#: The walks past the first steps: without any rule, with the open-holes count only, with it and
+#: the level rule (Bridge's defaults), and with every rule's tests.
+_walk_row_plain = _walk_row_kernel(False, False, False)
+_walk_row_holes = _walk_row_kernel(False, False, True)
+_walk_row_level = _walk_row_kernel(False, True, True)
+_walk_row = _walk_row_kernel(True, True, True)
 
 
 #: The level-surface rule as the kernel takes it: (on, sin and |tan| of the row elevations
@@ -671,34 +674,38 @@ def _first_steps_level(
     r: int,
     cos_t: np.ndarray,
     level: LevelRule,
+    found: np.ndarray,
 ) -> None:
     """:func:`_first_steps` of the up walk of row ``r`` with the level-surface rule: a link also
     where :func:`_supported_level` holds; the walk's bound reaches ``max(t_p, cap)``. The level
-    test itself runs branch-free over the row; the support (``level_support``) is checked
-    afterwards for the links that need it."""
+    test itself runs branch-free over the row, flagging the level links that are no plain links
+    in ``found`` (scratch, (W,) uint8); the support (``level_support``) is checked afterwards for
+    those only."""
     _, sin_e, tan_e, spacing, tol, margin, cap, support = level
     se_p, se_q, te_q, sp = sin_e[r], sin_e[r - 1], tan_e[r - 1], spacing[r, 1]
+    n_level = 0  # level links that are no plain links: only they need the support
     for c in range(d.size):
         dd = np.float64(d[c])
         q = np.float64(dq[c])
         t = dd * sin_gamma
         tp = threshold if threshold >= t else t
         ok = (dd > 0.0) & (dd * sin_1 < max(tp, cap))
-        linked = ok & (q > 0.0) & distance_edge(dd, q, cos_1, tp * tp)
-        linked |= ok & (q > 0.0) & _level_edge(dd, q, se_p, se_q, te_q, cos_1, sp, tol, margin, cap)
+        plain = ok & (q > 0.0) & distance_edge(dd, q, cos_1, tp * tp)
+        lv = ok & (q > 0.0) & _level_edge(dd, q, se_p, se_q, te_q, cos_1, sp, tol, margin, cap)
+        linked = plain | lv
+        level_only = lv & ~plain
+        found[c] = level_only
+        n_level += np.int64(level_only)
         free = ((q > 0.0) & (q > dd)) | ((q <= 0.0) & (rq[c] > dd))
         link[c] = linked
         on[c] = ok & ~linked & ~free & further
-    if support == 0:
+    if support == 0 or n_level == 0:
         return
     for c in range(d.size):
-        if not link[c]:
+        if not found[c]:
             continue
         dd = np.float64(d[c])
         q = np.float64(dq[c])
-        tp = max(threshold, dd * sin_gamma)
-        if distance_edge(dd, q, cos_1, tp * tp):
-            continue
         if not _supported_level(
             nodes, w, r, 1, c, dd, q, cos_1, cos_t, sin_e, tan_e, spacing, tol, margin, cap, support
         ):
@@ -762,6 +769,7 @@ def _bridge_components(
     ur_link = np.zeros(pad, dtype=np.uint8)
     ul_go = np.zeros(pad, dtype=np.uint8)  # a diagonal walk to go on with
     ur_go = np.zeros(pad, dtype=np.uint8)
+    level_only = np.zeros(w, dtype=np.uint8)  # an up link at the first step that is level only
     ul_w = np.zeros(nw, dtype=np.uint64)
     ur_w = np.zeros(nw, dtype=np.uint64)
     on_w = np.zeros((4, nw), dtype=np.uint64)
@@ -810,6 +818,7 @@ def _bridge_components(
                 _first_steps_level(
                     up[:w], up_on[:w], d, above, raw_above, threshold, sin_gamma,
                     cos_t[1, r, 1], sin_t[1, r, 1], k_up >= 2, nodes, w, r, cos_t, level,
+                    level_only,
                 )  # fmt: skip
             else:
                 _first_steps(
@@ -876,8 +885,14 @@ def _bridge_components(
                     union(parent, labels[row + c], labels[j])
         pack(left_on[: 64 * nw], on_w[0])
         pack(up_on[: 64 * nw], on_w[1])
-        if fixed_side_gaps or level[0]:
+        if fixed_side_gaps:
             _walk_row(
+                r, w, on_w, nodes, rf, labels, parent, cos_t, sin_t, threshold, sin_gamma,
+                k_row, k_up, walks, link_c, link_q, holed, fixed_side_gaps, col_above, col_below,
+                level, max_open, holes,
+            )  # fmt: skip
+        elif level[0]:
+            _walk_row_level(
                 r, w, on_w, nodes, rf, labels, parent, cos_t, sin_t, threshold, sin_gamma,
                 k_row, k_up, walks, link_c, link_q, holed, fixed_side_gaps, col_above, col_below,
                 level, max_open, holes,
@@ -889,7 +904,7 @@ def _bridge_components(
                 level, max_open, holes,
             )  # fmt: skip
         else:
-            _walk_row_default(
+            _walk_row_plain(
                 r, w, on_w, nodes, rf, labels, parent, cos_t, sin_t, threshold, sin_gamma,
                 k_row, k_up, walks, link_c, link_q, holed, fixed_side_gaps, col_above, col_below,
                 level, max_open, holes,
