@@ -46,8 +46,8 @@ offsets), so nothing further on could be linked. This bound changes no edge; it 
 walks short (the window shrinks with the range: at 20 m and 2048 columns a
 horizontal walk ends after 11 columns).
 
-With ``reach_px = 1`` and ``gamma_deg = 0`` the graph is FLIC without Map Connections plus the
-diagonal links of measurements on a surface's border.
+With ``reach_px = 1``, ``gamma_deg = 0`` and ``level_tolerance = 0`` the graph is FLIC without
+Map Connections plus the diagonal links of measurements on a surface's border.
 
 Gaps beside (``fixed_side_gaps``, off by default)
 -------------------------------------------------
@@ -105,7 +105,8 @@ points of IoU_mu (seeds 0, 1, 7; every class as before or better), every sensor 
 0.2-2.2, the 50 shared KITTI frames and the scenes are unchanged (+0.01, +0.07, not
 significant); a van's hood one row deep is not joined to its cabin (no level node beyond q).
 Without the support (``"none"``) or with ``"either"`` the sample lost 1.9 and 0.25 points
-(people, motorcycles and parked cars joined to what stood behind them).
+(people, motorcycles and parked cars joined to what stood behind them). The rule takes 1.16x
+the time of the walk without it (1.31 ms per 870 x 64 frame with the ground extraction).
 
 Open holes (``open_holes_px``; 4 by default)
 --------------------------------------------
