@@ -311,9 +311,9 @@ print(",".join(["bridge", *tomllib.load(open(sys.argv[1], "rb"))["methods"]]))' 
       keep "$out" table.csv by_class.csv by_distance.csv paired.csv
     done
     cp "$BC/cases.csv" results/bridge-cases/cases/objects.csv
-    # the open-holes variants and the Bridge without the level rule on every sensor profile's street
-    # (seed 0, 10 frames), as in step
-    # sensors-synthetic (whose other methods' figures they sit beside)
+    # the open-holes variants and the Bridge without the level rule on every sensor profile's
+    # street (seed 0, 10 frames), as in step sensors-synthetic (whose other methods' figures they
+    # sit beside)
     fresh results/bridge-cases/profiles
     python scripts/sensors_study.py profiles --frames 10 --out results/bridge-cases/profiles \
       --work "$TMP/bridge-cases-sensors" \
