@@ -388,20 +388,14 @@ def _person(x: float, y: float, instance: int):
 def test_two_people_one_metre_apart_stay_two_clusters(distance_m, behind):
     # Two people side by side, centres 1 m apart (a 0.5 m gap), in front of the sensor, cast
     # with the sample's HDL-64E model; ground points removed as in the "No Ground" setting.
-    from flic_cli.classes import GROUND_CLASSES
-    from flic_cli.sample import HDL64_PITCH_DEG, Box, Ground, Scene, cast
+    from flic_cli.sample import Box, Ground
 
     boxes = [_person(distance_m, -0.5, 1), _person(distance_m, 0.5, 2)]
     if behind == "facade":
         boxes.append(Box((distance_m + 8.0, 0.0, 2.0), (0.2, 10.0, 5.0), 0.0, 50))
-    scene = Scene(0, 0, np.eye(3, 4), Ground(0.0, (-4.0, 4.0), (-8.0, 8.0)), boxes, [])
-    elevation = -np.radians(HDL64_PITCH_DEG)
-    img0 = RangeImage(np.zeros((64, WIDTH), np.float32), elevation, np.zeros(0, np.int64), "x")
-    ranges, semantic, instance = cast(
-        scene, HDL64_PITCH_DEG, img0.azimuth, np.random.default_rng(0)
-    )
-    ranges[np.isin(semantic, list(GROUND_CLASSES))] = 0.0  # the "No Ground" setting
-    labels = bridge_labels(ranges.astype(np.float32), elevation, min_size=30)
+    ground = Ground(0.0, (-4.0, 4.0), (-8.0, 8.0))
+    ranges, elevation, instance = _cast_without_ground(boxes, ground)
+    labels = bridge_labels(ranges, elevation, min_size=30)
     a = labels[instance == 1]
     b = labels[instance == 2]
     assert a.size > 100 and b.size > 100
@@ -411,18 +405,14 @@ def test_two_people_one_metre_apart_stay_two_clusters(distance_m, behind):
     assert (a == la).mean() > 0.95 and (b == lb).mean() > 0.95
 
 
-def _two_people_image(distance_m: float, gap_m: float):
-    """Two people side by side ``gap_m`` apart at ``distance_m`` on a flat road, a facade 8 m
-    behind them, cast with the sample's HDL-64E model at 2048 columns; the ground's returns
-    removed as in the "No Ground" setting (between the legs the scan shows nothing, higher up
-    it sees the facade through the gap)."""
+def _cast_without_ground(boxes, ground=None):
+    """``boxes`` on ``ground`` (None: the flat road), cast with the sample's HDL-64E model at 2048
+    columns, the ground's returns removed as in the "No Ground" setting: (ranges, elevation,
+    instance)."""
     from flic_cli.classes import GROUND_CLASSES
-    from flic_cli.sample import HDL64_PITCH_DEG, Box, Ground, Scene, cast
+    from flic_cli.sample import HDL64_PITCH_DEG, Ground, Scene, cast
 
-    half = (gap_m + 0.5) / 2
-    boxes = [_person(distance_m, -half, 1), _person(distance_m, half, 2)]
-    boxes.append(Box((distance_m + 8.0, 0.0, 2.0), (0.2, 10.0, 5.0), 0.0, 50))
-    scene = Scene(0, 0, np.eye(3, 4), Ground.flat(), boxes, [])
+    scene = Scene(0, 0, np.eye(3, 4), ground or Ground.flat(), boxes, [])
     elevation = -np.radians(HDL64_PITCH_DEG)
     img0 = RangeImage(np.zeros((64, WIDTH), np.float32), elevation, np.zeros(0, np.int64), "x")
     ranges, semantic, instance = cast(
@@ -430,6 +420,19 @@ def _two_people_image(distance_m: float, gap_m: float):
     )
     ranges[np.isin(semantic, list(GROUND_CLASSES))] = 0.0
     return ranges.astype(np.float32), elevation, instance
+
+
+def _two_people_image(distance_m: float, gap_m: float):
+    """Two people side by side ``gap_m`` apart at ``distance_m`` on a flat road, a facade 8 m
+    behind them, cast with the sample's HDL-64E model at 2048 columns; the ground's returns
+    removed as in the "No Ground" setting (between the legs the scan shows nothing, higher up
+    it sees the facade through the gap)."""
+    from flic_cli.sample import Box
+
+    half = (gap_m + 0.5) / 2
+    boxes = [_person(distance_m, -half, 1), _person(distance_m, half, 2)]
+    boxes.append(Box((distance_m + 8.0, 0.0, 2.0), (0.2, 10.0, 5.0), 0.0, 50))
+    return _cast_without_ground(boxes)
 
 
 def assert_people_whole(labels, instance, apart):
@@ -613,8 +616,7 @@ def _vehicle_image(kind: str, distance_m: float):
     """A car seen from behind (its rear face at ``distance_m``) or a van seen from the front
     (a 1.0 m high hood box, the cabin's face 0.7 m behind it), straight ahead on a flat road,
     cast with the sample's HDL-64E model at 2048 columns, the ground's returns removed."""
-    from flic_cli.classes import GROUND_CLASSES
-    from flic_cli.sample import HDL64_PITCH_DEG, Box, Ground, Scene, car, cast
+    from flic_cli.sample import Box, Ground, car
 
     zg = -Ground.flat().sensor_height
     if kind == "car":
@@ -626,14 +628,7 @@ def _vehicle_image(kind: str, distance_m: float):
             Box((distance_m + 0.35, 0.0, zg + 0.625), (0.35, 0.95, 0.375), 0.0, 20, 1),
             Box((distance_m + 2.6 + gap, 0.0, zg + 1.175), (1.9, 0.95, 0.925), 0.0, 20, second),
         ]
-    scene = Scene(0, 0, np.eye(3, 4), Ground.flat(), boxes, [])
-    elevation = -np.radians(HDL64_PITCH_DEG)
-    img0 = RangeImage(np.zeros((64, WIDTH), np.float32), elevation, np.zeros(0, np.int64), "x")
-    ranges, semantic, instance = cast(
-        scene, HDL64_PITCH_DEG, img0.azimuth, np.random.default_rng(0)
-    )
-    ranges[np.isin(semantic, list(GROUND_CLASSES))] = 0.0
-    return ranges.astype(np.float32), elevation, instance
+    return _cast_without_ground(boxes)
 
 
 @pytest.mark.parametrize(("kind", "distance_m"), [("car", 8.0), ("van", 8.0)])
@@ -676,18 +671,10 @@ def _behind_a_car_image(distance_m: float, behind_m: float, size: tuple[float, f
     """The car of :func:`_vehicle_image` (rear face at ``distance_m``, 4.4 m long) and a box
     standing ``behind_m`` beyond its front (instance 2, a person or a motorcycle by ``size``),
     seen through the car's windows above its body, the ground's returns removed."""
-    from flic_cli.classes import GROUND_CLASSES
-    from flic_cli.sample import HDL64_PITCH_DEG, Ground, Scene, car, cast, person
+    from flic_cli.sample import car, person
 
     boxes = [*car(distance_m + 2.2, 0.0, 1), person(distance_m + 4.4 + behind_m, 0.0, 2, size=size)]
-    scene = Scene(0, 0, np.eye(3, 4), Ground.flat(), boxes, [])
-    elevation = -np.radians(HDL64_PITCH_DEG)
-    img0 = RangeImage(np.zeros((64, WIDTH), np.float32), elevation, np.zeros(0, np.int64), "x")
-    ranges, semantic, instance = cast(
-        scene, HDL64_PITCH_DEG, img0.azimuth, np.random.default_rng(0)
-    )
-    ranges[np.isin(semantic, list(GROUND_CLASSES))] = 0.0
-    return ranges.astype(np.float32), elevation, instance
+    return _cast_without_ground(boxes)
 
 
 @pytest.mark.parametrize(
