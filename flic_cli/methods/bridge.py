@@ -164,7 +164,7 @@ the samples' gains 0.13 (seeds 0 and 1); 3 m and 6 m give the same. Without sema
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import TYPE_CHECKING, Annotated, ClassVar, Literal
+from typing import TYPE_CHECKING, Annotated, ClassVar, Literal, get_args
 
 import numpy as np
 from numba import njit
@@ -206,8 +206,10 @@ LEVEL_TOLERANCE = 0.25
 #: What a level link needs besides p and q (module docstring, "Level surfaces"): ``"none"``
 #: nothing, ``"either"`` the node below p level with p or the node above q level with q,
 #: ``"beyond"`` the node above q level with q (the default); the kernel takes the index.
-LEVEL_SUPPORT: tuple[str, ...] = ("none", "either", "beyond")
 LevelSupport = Literal["none", "either", "beyond"]
+LEVEL_SUPPORT: tuple[str, ...] = get_args(LevelSupport)
+#: The level link's support by default (module docstring, "Level surfaces").
+LEVEL_SUPPORT_DEFAULT: LevelSupport = "beyond"
 
 #: Walk directions (row step, column step): left, up, up-left, up-right (the order of the tables
 #: of :func:`walk_tables`). Every walk goes towards earlier pixels in raster order, except left
@@ -1108,7 +1110,7 @@ def run_bridge(
     level_tolerance: float = LEVEL_TOLERANCE,
     level_margin: float = 1.5,
     level_cap_m: float = 2.0,
-    level_support: LevelSupport = "beyond",
+    level_support: LevelSupport = LEVEL_SUPPORT_DEFAULT,
     azimuth_offset: np.ndarray | None = None,
     open_holes_px: int | None = OPEN_HOLES_PX,
     seen_through_m: float = 0.0,
@@ -1215,7 +1217,7 @@ class Bridge:
     ] = 2.0
     level_support: Annotated[
         LevelSupport, Field(description="level link: the third node it needs (beyond q, either)")
-    ] = "beyond"
+    ] = LEVEL_SUPPORT_DEFAULT
     open_holes_px: Annotated[
         int | None, Field(ge=0, description="most open holes a sideways walk crosses (px)")
     ] = OPEN_HOLES_PX
