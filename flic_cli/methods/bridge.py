@@ -202,6 +202,10 @@ SEEN_THROUGH_M = 4.0
 
 #: The level link's tolerance by default, footprints (module docstring, "Level surfaces").
 LEVEL_TOLERANCE = 0.25
+#: The level link's reach by default, times the footprint spacing it follows (``level_margin``).
+LEVEL_MARGIN = 1.5
+#: No level link by default where that reach exceeds this, metres (``level_cap_m``).
+LEVEL_CAP_M = 2.0
 
 #: What a level link needs besides p and q (module docstring, "Level surfaces"): ``"none"``
 #: nothing, ``"either"`` the node below p level with p or the node above q level with q,
@@ -1108,8 +1112,8 @@ def run_bridge(
     attached: np.ndarray | None = None,
     fixed_side_gaps: bool = False,
     level_tolerance: float = LEVEL_TOLERANCE,
-    level_margin: float = 1.5,
-    level_cap_m: float = 2.0,
+    level_margin: float = LEVEL_MARGIN,
+    level_cap_m: float = LEVEL_CAP_M,
     level_support: LevelSupport = LEVEL_SUPPORT_DEFAULT,
     azimuth_offset: np.ndarray | None = None,
     open_holes_px: int | None = OPEN_HOLES_PX,
@@ -1211,10 +1215,10 @@ class Bridge:
     ] = LEVEL_TOLERANCE
     level_margin: Annotated[
         float, Field(gt=0, le=10, description="level link: times the footprint spacing")
-    ] = 1.5
+    ] = LEVEL_MARGIN
     level_cap_m: Annotated[
         float, Field(gt=0, le=20, description="level link: longest reach, metres")
-    ] = 2.0
+    ] = LEVEL_CAP_M
     level_support: Annotated[
         LevelSupport, Field(description="level link: the third node it needs (beyond q, either)")
     ] = LEVEL_SUPPORT_DEFAULT
