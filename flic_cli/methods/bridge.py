@@ -164,7 +164,7 @@ the samples' gains 0.13 (seeds 0 and 1); 3 m and 6 m give the same. Without sema
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import TYPE_CHECKING, Annotated, ClassVar, Literal, get_args
+from typing import TYPE_CHECKING, Annotated, ClassVar, Literal, NamedTuple, get_args
 
 import numpy as np
 from numba import njit
@@ -460,10 +460,24 @@ _walk_row_level = _walk_row_kernel(False, True, True)
 _walk_row = _walk_row_kernel(True, True, True)
 
 
-#: The level-surface rule as the kernel takes it: (on, sin and |tan| of the row elevations
-#: (H,), the footprint spacing table of :func:`level_tables` (H, reach + 1), tolerance
-#: (footprints), margin, cap (m), the support's index in :data:`LEVEL_SUPPORT`).
-LevelRule = tuple[bool, np.ndarray, np.ndarray, np.ndarray, float, float, float, int]
+class LevelRule(NamedTuple):
+    """The level-surface rule as the kernels take it (module docstring, "Level surfaces")."""
+
+    on: bool
+    #: (H,) sine of the row elevations
+    sin_e: np.ndarray
+    #: (H,) |tan| of the row elevations
+    tan_e: np.ndarray
+    #: (H, reach + 1) footprint spacing per metre of height, :func:`level_tables`
+    spacing: np.ndarray
+    #: footprints
+    tolerance: float
+    #: times the footprint spacing
+    margin: float
+    #: metres
+    cap: float
+    #: the support's index in :data:`LEVEL_SUPPORT`
+    support: int
 
 
 @njit(cache=True)
@@ -790,7 +804,7 @@ def _bridge_components(
     one = np.uint64(1)
     k_row = min(reach, w - 1)
     n_labels = np.uint64(0)
-    options = fixed_side_gaps or level[0] or max_open >= 0
+    options = fixed_side_gaps or level.on or max_open >= 0
     # With an option on, all rows first: its walks look up and down the column of a gap (a hole
     # in a surface?) and level links at the row below; the default walks look at earlier rows
     # only, so each row is filled as it comes (one pass for ranges and flags).
@@ -823,7 +837,7 @@ def _bridge_components(
         if k_up >= 1:
             above = nodes[row - w : row]
             raw_above = rf[row - w : row]
-            if level[0]:
+            if level.on:
                 _first_steps_level(
                     up[:w], up_on[:w], d, above, raw_above, threshold, sin_gamma,
                     cos_t[1, r, 1], sin_t[1, r, 1], k_up >= 2, nodes, w, r, cos_t, level,
@@ -900,7 +914,7 @@ def _bridge_components(
                 k_row, k_up, walks, link_c, link_q, holed, fixed_side_gaps, col_above, col_below,
                 level, max_open, holes,
             )  # fmt: skip
-        elif level[0]:
+        elif level.on:
             _walk_row_level(
                 r, w, on_w, nodes, rf, labels, parent, cos_t, sin_t, threshold, sin_gamma,
                 k_row, k_up, walks, link_c, link_q, holed, fixed_side_gaps, col_above, col_below,
@@ -1148,7 +1162,7 @@ def run_bridge(
         sin_e, tan_e = np.sin(elevation), np.abs(np.tan(elevation))
     else:  # not read
         spacing, sin_e, tan_e = _NO_LEVEL
-    level = (
+    level = LevelRule(
         bool(level_on), sin_e, tan_e, spacing, float(level_tolerance), float(level_margin),
         float(level_cap_m), LEVEL_SUPPORT.index(level_support),
     )  # fmt: skip
