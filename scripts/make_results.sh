@@ -321,6 +321,22 @@ print(",".join(["bridge", *tomllib.load(open(sys.argv[1], "rb"))["methods"]]))' 
       --extra-config configs/bridge-cases.toml --jobs "$JOBS"
     for d in results/bridge-cases/profiles/*/; do keep "$d" table.csv by_class.csv differences.csv; done
     rm -f results/bridge-cases/profiles/geometry.csv
+    # the deck link, measured and not built (scripts/bridge_deck.py, one process per data set:
+    # its method kind is registered in that process), on the same data sets and streets
+    deck=results/bridge-cases/deck
+    fresh "$deck"
+    for set in "cases:$BC:no-ground" "kitti:$DATA:both" \
+      "sample0:$TMP/sample-seed0/semantickitti:both" "sample1:$TMP/sample-seed1/semantickitti:both"; do
+      IFS=: read -r name data setting <<< "$set"
+      python scripts/bridge_deck.py "$data" "$deck/$name" --setting "$setting"
+      keep "$deck/$name" table.csv by_class.csv paired.csv links.csv
+    done
+    for d in "$TMP"/bridge-cases-sensors/*/; do
+      s=$(basename "$d")
+      python scripts/bridge_deck.py "$d/semantickitti" "$deck/profiles/$s" \
+        --config "$TMP/bridge-cases-sensors/$s.config.toml"
+      keep "$deck/profiles/$s" table.csv by_class.csv paired.csv links.csv
+    done
     # Bridge with the removed ground's returns seen as free space (scripts/ground_study.py oracle's "labels,
     # per point" row against the no-ground setting), on the scenes and three samples
     sample "$TMP/sample-seed7" 60 7

@@ -38,3 +38,73 @@ def test_every_study_subcommand_builds_its_parser(script: str) -> None:
 
 def test_the_studies_listed_here_are_the_ones_in_scripts() -> None:
     assert set(STUDIES) == {p.name for p in SCRIPTS.glob("*_study.py")}
+
+
+def _bridge_deck():
+    """``scripts/bridge_deck.py`` as the module ``bridge_deck`` (a measurement of a rule that is
+    not built), loaded once."""
+    import importlib.util
+
+    if "bridge_deck" not in sys.modules:
+        spec = importlib.util.spec_from_file_location("bridge_deck", SCRIPTS / "bridge_deck.py")
+        module = importlib.util.module_from_spec(spec)
+        sys.modules["bridge_deck"] = module  # the dataclass looks its module up
+        spec.loader.exec_module(module)
+    return sys.modules["bridge_deck"]
+
+
+def _deck_column(step_m: float, above_x: float | None = None, columns: int = 1, width: int = 64):
+    """Four rows, ``columns`` equal columns of ``width``: a low upright face 12 m away (rows 2, 3:
+    p and the node below it) and an upright face ``step_m`` behind it (rows 0, 1: the node above
+    q and q), or, with ``above_x``, the node above q at that horizontal range instead."""
+    import numpy as np
+
+    elevation = np.radians([-0.6, -1.0, -1.4, -1.8])
+    x = np.array([12.0 + step_m if above_x is None else above_x, 12.0 + step_m, 12.0, 12.0])
+    ranges = np.zeros((4, width), np.float32)
+    ranges[:, :columns] = (x / np.cos(elevation))[:, None]
+    return ranges, elevation
+
+
+def test_deck_links_are_the_hand_found_pairs() -> None:
+    import numpy as np
+
+    deck = _bridge_deck().deck_links
+    ranges, elevation = _deck_column(0.7)
+    p, q = deck(ranges, elevation, None, 0.8)
+    np.testing.assert_array_equal(p, [2 * 64])  # row 2, column 0
+    np.testing.assert_array_equal(q, [64])  # one row up
+    assert deck(ranges, elevation, None, 0.6)[0].size == 0  # deeper than the deck
+    skip = np.zeros(ranges.shape, bool)
+    skip[3, 0] = True  # nothing below p: no face under it
+    assert deck(ranges, elevation, skip, 0.8)[0].size == 0
+    level = _deck_column(0.7, above_x=14.0)  # above q a level surface, not a face
+    assert deck(*level, None, 0.8)[0].size == 0
+    # a run of 2 columns at 12 m of 64 spans 2 x 12 x 2 pi / 64 = 2.36 m; of 1 column 1.18 m
+    two = _deck_column(0.7, columns=2)
+    assert deck(*two, None, 0.8, deck_width_m=2.3)[0].size == 2
+    assert deck(ranges, elevation, None, 0.8, deck_width_m=2.3)[0].size == 0
+
+
+@pytest.mark.parametrize("ground", [None, "column"])
+def test_bridge_deck_without_decks_gives_bridges_labels(small_sample, tmp_path, ground) -> None:
+    # the script's method joins Bridge's clusters (found without the minimum size) over its deck
+    # links and then drops the small ones: with no deck link it must be Bridge
+    import numpy as np
+
+    from flic_cli import registry
+    from flic_cli.api import load_frame, segment_frame
+
+    _bridge_deck()
+    registry.register("method", "bridge-deck", registry.Entry("bridge_deck:BridgeDeck", "deck"))
+    try:
+        config = tmp_path / "deck.toml"
+        config.write_text('[methods.deck0]\nkind = "bridge-deck"\ndeck_max_m = 0.0\n')
+        for frame in range(3):
+            data = load_frame(small_sample.kitti_root, frame)
+            want = segment_frame(data, "bridge", ground=ground, config=config)
+            got = segment_frame(data, "deck0", ground=ground, config=config)
+            assert (want > 0).sum() > 1000
+            np.testing.assert_array_equal(got, want)
+    finally:
+        registry.unregister("method", "bridge-deck")
