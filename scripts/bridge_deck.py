@@ -11,7 +11,11 @@ there. A deck link joins p = (r, c) and q = (r - 1, c) where
 - the node below p and the node above q are nodes on the same upright faces as p and q: each
   lies higher than the other by more than ``1 / deck_upright`` times their horizontal distance;
 - with ``deck_width_m`` > 0, the step runs along at least that many metres of row r (the
-  columns of one run of such pairs, at p's range): a vehicle's width, not a bicycle's.
+  columns of one run of such pairs, at p's range): a vehicle's width, not a bicycle's;
+- with ``deck_within``, q's cluster lies within the columns of p's cluster (two columns either
+  side): a vehicle's upper body stands within the outline of its lower body as the sensor sees
+  it, a wall or a building behind a bicycle reaches beyond it (the clusters are Bridge's, before
+  the links and the minimum size; a cluster across the image's first column spans them all).
 
 The links are added to Bridge's graph (its clusters joined where a link joins them: the
 components of the graph with the links), then the minimum size applies as in Bridge. The method
@@ -56,14 +60,18 @@ from flic_cli.labels import instance, semantic
 from flic_cli.methods.base import drop_small, ground_parts, point_weights
 from flic_cli.methods.bridge import Bridge, run_bridge
 
-#: The variants measured: name -> (deck_max_m, deck_width_m).
+#: The variants measured: name -> (deck_max_m, deck_width_m, deck_within).
 VARIANTS = {
-    "bridge-deck-06": (0.6, 0.0),
-    "bridge-deck-08": (0.8, 0.0),
-    "bridge-deck-10": (1.0, 0.0),
-    "bridge-deck-08-wide": (0.8, 1.0),
-    "bridge-deck-10-wide": (1.0, 1.0),
+    "bridge-deck-06": (0.6, 0.0, False),
+    "bridge-deck-08": (0.8, 0.0, False),
+    "bridge-deck-10": (1.0, 0.0, False),
+    "bridge-deck-08-wide": (0.8, 1.0, False),
+    "bridge-deck-10-wide": (1.0, 1.0, False),
+    "bridge-deck-08-within": (0.8, 0.0, True),
+    "bridge-deck-10-within": (1.0, 0.0, True),
 }
+#: columns either side of p's cluster that q's cluster may reach with ``deck_within``
+WITHIN_PX = 2
 
 
 def deck_links(
@@ -124,6 +132,7 @@ class BridgeDeck(Bridge):
     deck_max_m: Annotated[float, Field(ge=0, le=5)] = 0.8
     deck_upright: Annotated[float, Field(gt=0, le=5)] = 0.5
     deck_width_m: Annotated[float, Field(ge=0, le=10)] = 0.0
+    deck_within: bool = False
 
     def clusters(self, image, left_out, attached, weights) -> np.ndarray:  # noqa: ANN001
         """Bridge's clusters of the pixels without the minimum size, (H * W,)."""
@@ -134,12 +143,26 @@ class BridgeDeck(Bridge):
             self.open_holes_px,
         ).reshape(-1)  # fmt: skip
 
-    def links(self, image, left_out) -> tuple[np.ndarray, np.ndarray]:  # noqa: ANN001
-        """This variant's deck links (:func:`deck_links`)."""
-        return deck_links(
+    def links(self, image, left_out, labels) -> tuple[np.ndarray, np.ndarray]:  # noqa: ANN001
+        """This variant's deck links (:func:`deck_links`) between two of Bridge's clusters
+        (``labels``, :meth:`clusters`), with ``deck_within`` those whose q's cluster lies within
+        the columns of p's."""
+        p, q = deck_links(
             image.ranges, image.elevation, left_out, self.deck_max_m, self.deck_upright,
             self.deck_width_m,
         )  # fmt: skip
+        keep = (labels[p] > 0) & (labels[q] > 0) & (labels[p] != labels[q])
+        if self.deck_within and keep.any():
+            width = image.ranges.shape[1]
+            column = np.arange(labels.size) % width
+            has = labels > 0
+            first = np.full(int(labels.max()) + 1, width)
+            last = np.full(first.size, -1)
+            np.minimum.at(first, labels[has], column[has])
+            np.maximum.at(last, labels[has], column[has])
+            lp, lq = labels[p], labels[q]
+            keep &= (first[lq] >= first[lp] - WITHIN_PX) & (last[lq] <= last[lp] + WITHIN_PX)
+        return p[keep], q[keep]
 
     def segment(self, image, points, ground, semantics=None) -> np.ndarray:  # noqa: ANN001
         if semantics is not None:
@@ -147,12 +170,10 @@ class BridgeDeck(Bridge):
         left_out, attached = ground_parts(ground)
         weights = point_weights(image)
         labels = self.clusters(image, left_out, attached, weights)
-        p, q = self.links(image, left_out)
-        lp, lq = labels[p], labels[q]
-        joined = (lp > 0) & (lq > 0)
-        if joined.any():
+        p, q = self.links(image, left_out, labels)
+        if p.size:
             n = int(labels.max()) + 1
-            graph = coo_matrix((np.ones(int(joined.sum())), (lp[joined], lq[joined])), (n, n))
+            graph = coo_matrix((np.ones(p.size), (labels[p], labels[q])), (n, n))
             comp = connected_components(graph, directed=False)[1]
             labels = np.where(labels > 0, comp[labels] + 1, 0)
         counts = np.ones(labels.size, np.int64) if weights is None else weights.reshape(-1)
@@ -175,11 +196,11 @@ def deck_joins(data: Path, config: Path) -> pd.DataFrame:
         truth = image.pixel_values(prep.labels.astype(np.int64), fill=0).reshape(-1)
         obj, cls = instance(truth) > 0, semantic(truth)
         labels = BridgeDeck().clusters(image, None, None, point_weights(image))
-        for name, (deck_max, width) in VARIANTS.items():
-            p, q = BridgeDeck(deck_max_m=deck_max, deck_width_m=width).links(image, None)
-            new = labels[p] != labels[q]
-            same = new & (truth[p] == truth[q]) & obj[p]
-            apart = new & (truth[p] != truth[q]) & (obj[p] | obj[q])
+        for name, (deck_max, width, within) in VARIANTS.items():
+            deck = BridgeDeck(deck_max_m=deck_max, deck_width_m=width, deck_within=within)
+            p, q = deck.links(image, None, labels)
+            same = (truth[p] == truth[q]) & obj[p]
+            apart = (truth[p] != truth[q]) & (obj[p] | obj[q])
             for kind, pick in (("one object", same), ("apart", apart)):
                 for a, b in zip(cls[p[pick]], cls[q[pick]], strict=True):
                     key = (name, kind, class_name(a), class_name(b))
@@ -207,7 +228,8 @@ def main() -> None:
     text = args.config.read_text() if args.config else ""
     text += "".join(
         f'\n[methods.{name}]\nkind = "bridge-deck"\ndeck_max_m = {g}\ndeck_width_m = {wd}\n'
-        for name, (g, wd) in VARIANTS.items()
+        f"deck_within = {str(within).lower()}\n"
+        for name, (g, wd, within) in VARIANTS.items()
     )
     with tempfile.TemporaryDirectory() as tmp:
         config = Path(tmp) / "deck.toml"

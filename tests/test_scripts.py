@@ -108,3 +108,29 @@ def test_bridge_deck_without_decks_gives_bridges_labels(small_sample, tmp_path, 
             np.testing.assert_array_equal(got, want)
     finally:
         registry.unregister("method", "bridge-deck")
+
+
+@pytest.mark.parametrize(("upper", "kept"), [((3, 7), True), ((0, 21), False)])
+def test_deck_within_keeps_an_upper_face_inside_the_lower_ones_columns(upper, kept) -> None:
+    # a low face over columns 0-9 (rows 2, 3; cluster 1) and a face 0.7 m behind it (rows 0, 1;
+    # cluster 2) over ``upper``'s columns: a cabin within the hood's outline is linked, a wall
+    # reaching beyond it is not
+    from types import SimpleNamespace
+
+    import numpy as np
+
+    module = _bridge_deck()
+    ranges, elevation = _deck_column(0.7, columns=64)
+    ranges[2:, 10:] = 0.0
+    ranges[:2, : upper[0]] = 0.0
+    ranges[:2, upper[1] :] = 0.0
+    labels = np.zeros(ranges.shape, np.int64)
+    labels[2:][ranges[2:] > 0] = 1
+    labels[:2][ranges[:2] > 0] = 2
+    image = SimpleNamespace(ranges=ranges, elevation=elevation)
+    deck = module.BridgeDeck(deck_max_m=0.8, deck_within=True)
+    p, q = deck.links(image, None, labels.reshape(-1))
+    both = np.arange(max(upper[0], 0), min(upper[1], 10))
+    np.testing.assert_array_equal(p, 2 * 64 + both if kept else [])
+    p_any, _ = module.BridgeDeck(deck_max_m=0.8).links(image, None, labels.reshape(-1))
+    np.testing.assert_array_equal(p_any, 2 * 64 + both)
