@@ -9,6 +9,8 @@ import sys
 from pathlib import Path
 
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 SCRIPTS = Path(__file__).resolve().parents[1] / "scripts"
 STUDIES = {
@@ -134,3 +136,39 @@ def test_deck_within_keeps_an_upper_face_inside_the_lower_ones_columns(upper, ke
     np.testing.assert_array_equal(p, 2 * 64 + both if kept else [])
     p_any, _ = module.BridgeDeck(deck_max_m=0.8).links(image, None, labels.reshape(-1))
     np.testing.assert_array_equal(p_any, 2 * 64 + both)
+
+
+@settings(max_examples=150, deadline=None)
+@given(
+    image=st.lists(st.sampled_from([0.0, 2.0, 2.3, 2.6, 3.4]), min_size=6 * 5, max_size=6 * 5),
+    noise=st.lists(st.floats(-0.05, 0.05), min_size=6 * 5, max_size=6 * 5),
+    deck_max=st.sampled_from([0.3, 0.8, 2.0]),
+    upright=st.sampled_from([0.2, 0.5, 2.0]),
+)
+def test_deck_links_equal_their_definition_pixel_by_pixel(image, noise, deck_max, upright) -> None:
+    # the vectorised links against the module docstring's test written out for every pixel, on
+    # small random images of upright faces and steps (6 rows of 5 columns; each pixel's
+    # horizontal range one of a few values, 0 = no node, with noise)
+    import numpy as np
+
+    elevation = np.radians([1.0, -2.0, -6.0, -10.0, -14.0, -18.0])
+    horizontal = np.array(image).reshape(6, 5)
+    ranges = np.where(horizontal > 0, horizontal + np.array(noise).reshape(6, 5), 0.0)
+    ranges /= np.cos(elevation)[:, None]
+    p, q = _bridge_deck().deck_links(ranges, elevation, None, deck_max, upright)
+    x, z = ranges * np.cos(elevation)[:, None], ranges * np.sin(elevation)[:, None]
+    want = []
+    for r in range(2, 5):
+        for c in range(5):
+            b, a = (r + 1, c), (r - 2, c)
+            if min(ranges[r + 1, c], ranges[r, c], ranges[r - 1, c], ranges[r - 2, c]) <= 0:
+                continue
+            if elevation[r] >= 0 or elevation[r - 1] >= 0:
+                continue
+            step = x[r - 1, c] - x[r, c]
+            face_p = (z[r, c] - z[b]) * upright > abs(x[r, c] - x[b])
+            face_q = (z[a] - z[r - 1, c]) * upright > abs(x[a] - x[r - 1, c])
+            if face_p and face_q and 0 < step <= deck_max and z[r - 1, c] > z[r, c]:
+                want.append(r * 5 + c)
+    np.testing.assert_array_equal(np.sort(p), want)
+    np.testing.assert_array_equal(q, p - 5)
