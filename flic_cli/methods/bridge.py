@@ -302,10 +302,10 @@ def _walk_row_kernel(gaps: bool, level_rule: bool, holes: bool) -> Callable[...,
     (``holes``) or without it.
 
     ``gaps``, ``level_rule`` and ``holes`` are constants of the compiled code, so a walk carries
-    none of the
-    loads, stores and selects of the rules it does not use: with the options compiled in but off,
-    Bridge took 10-13 % longer per SemanticKITTI frame than before the options came (measured
-    interleaved; see results/benchmark/revisions/README.md).
+    none of the loads, stores and selects of the rules it does not use: with the options compiled
+    in but off, Bridge took 10-13 % longer per SemanticKITTI frame than before the options came
+    (measured interleaved; see results/benchmark/revisions/README.md). (numba cannot hold one of
+    these kernels in a variable, so the caller names each in a branch of its own.)
     """
 
     @njit(cache=True)
