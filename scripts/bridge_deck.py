@@ -29,9 +29,11 @@ Usage::
     # the deck variants below into OUT, then scripts/paired_differences.py OUT
 
 ``OUT/links.csv``: the deck links of each variant that join two of Bridge's clusters, in the
-no-ground setting: ``variant, truth, class_p, class_q, links, frames`` (``truth``: ``one
-object`` where p and q are points of one object, ``apart`` where they are of two objects or of
-an object and something that is none; the classes of p and q; ``frames``: in how many frames).
+no-ground setting: ``variant, truth, class_p, class_q, links, frames, step_min_m, step_max_m,
+z_p_median_m`` (``truth``: ``one object`` where p and q are points of one object, ``apart``
+where they are of two objects or of an object and something that is none; the classes of p and
+q; ``frames``: in how many frames; the shortest and longest step from p to q, horizontal, and the
+median height of p, sensor frame, metres).
 """
 
 from __future__ import annotations
@@ -189,12 +191,15 @@ def deck_joins(data: Path, config: Path) -> pd.DataFrame:
 
     projection = load_config(config).projection
     dataset = open_dataset(data)
-    counts: dict[tuple[str, str, str, str], list] = {}
+    parts = []
     for ref in tqdm(dataset.refs(), desc="deck links", unit="frame"):
         prep = prepare(dataset.load(ref), "no-ground", projection)
         image = prep.image
         truth = image.pixel_values(prep.labels.astype(np.int64), fill=0).reshape(-1)
         obj, cls = instance(truth) > 0, semantic(truth)
+        elevation = np.repeat(image.elevation, image.ranges.shape[1])
+        ranges = image.ranges.reshape(-1).astype(np.float64)
+        x, z = ranges * np.cos(elevation), ranges * np.sin(elevation)
         labels = BridgeDeck().clusters(image, None, None, point_weights(image))
         for name, (deck_max, width, within) in VARIANTS.items():
             deck = BridgeDeck(deck_max_m=deck_max, deck_width_m=width, deck_within=within)
@@ -202,15 +207,26 @@ def deck_joins(data: Path, config: Path) -> pd.DataFrame:
             same = (truth[p] == truth[q]) & obj[p]
             apart = (truth[p] != truth[q]) & (obj[p] | obj[q])
             for kind, pick in (("one object", same), ("apart", apart)):
-                for a, b in zip(cls[p[pick]], cls[q[pick]], strict=True):
-                    key = (name, kind, class_name(a), class_name(b))
-                    hit = counts.setdefault(key, [0, None, 0])
-                    hit[0] += 1
-                    if hit[1] != (ref.sequence, ref.frame):  # frames counted once each
-                        hit[1], hit[2] = (ref.sequence, ref.frame), hit[2] + 1
-    rows = [(*k, v[0], v[2]) for k, v in counts.items()]
-    columns = ["variant", "truth", "class_p", "class_q", "links", "frames"]
-    table = pd.DataFrame(rows, columns=columns)
+                pp, qq = p[pick], q[pick]
+                parts.append(pd.DataFrame({
+                    "variant": name, "truth": kind,
+                    "class_p": [class_name(c) for c in cls[pp]],
+                    "class_q": [class_name(c) for c in cls[qq]],
+                    "frame": f"{ref.sequence}/{ref.frame}", "step_m": x[qq] - x[pp], "z_p_m": z[pp],
+                }))  # fmt: skip
+    links = pd.concat(parts, ignore_index=True)
+    table = (
+        links.groupby(["variant", "truth", "class_p", "class_q"])
+        .agg(
+            links=("step_m", "size"),
+            frames=("frame", "nunique"),
+            step_min_m=("step_m", "min"),
+            step_max_m=("step_m", "max"),
+            z_p_median_m=("z_p_m", "median"),
+        )
+        .reset_index()
+        .round(3)
+    )
     return table.sort_values(["variant", "truth", "links"], ascending=[True, True, False])
 
 
